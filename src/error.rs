@@ -1,0 +1,50 @@
+//! The library's error type.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in ricochet's library code.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A scene file could not be read.
+    #[error("{file}: cannot read: {source}")]
+    Read {
+        /// The file.
+        file: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A scene file is not valid TOML or does not have the expected shape.
+    #[error("{file}: {message}")]
+    Parse {
+        /// The file.
+        file: PathBuf,
+        /// What the parser said (it names line, column and key).
+        message: String,
+    },
+    /// A key has a value that is not allowed.
+    #[error("{file}: key `{key}` = {value}: {reason}")]
+    Invalid {
+        /// The file.
+        file: PathBuf,
+        /// The key, as a dotted path such as `material[1].density`.
+        key: String,
+        /// The offending value, as written.
+        value: String,
+        /// Why it is rejected.
+        reason: String,
+    },
+    /// Writing an output file failed.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The GPU backend could not be used.
+    #[error("GPU: {0}")]
+    Gpu(String),
+}
+
+/// Shorthand for results with [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

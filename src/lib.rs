@@ -1,0 +1,22 @@
+//! # ricochet
+//!
+//! A GPU-accelerated explicit contact-impact simulator for 2D solids.
+//!
+//! The code reads like the method: a [`scene`] file is meshed ([`mesh`]) into a flat [`model`];
+//! a [`plan`] lists the stages the scene needs; the [`step`] module integrates in time with the
+//! central-difference method (element forces, node update), on the CPU reference path
+//! ([`step::cpu`]) or on the GPU ([`gpu`]); [`run`] drives a solver and writes the [`output`].
+
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod gpu;
+pub mod mesh;
+pub mod model;
+pub mod output;
+pub mod plan;
+pub mod run;
+pub mod scene;
+pub mod step;
+
+pub use error::{Error, Result};

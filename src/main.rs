@@ -1,0 +1,256 @@
+//! The `ricochet` command line: `run`, `check` and `bench`.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand, ValueEnum};
+
+use ricochet::model::Model;
+use ricochet::plan::Plan;
+use ricochet::scene::Scene;
+use ricochet::step::cpu::CpuSolver;
+use ricochet::step::Solver;
+
+#[derive(Parser)]
+#[command(
+    name = "ricochet",
+    version,
+    about = "Explicit contact-impact simulation of 2D solids on the GPU"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Backend {
+    /// The GPU when an adapter exists, else the CPU (with a notice).
+    Auto,
+    /// The f64 CPU reference.
+    Cpu,
+    /// The GPU; an error when no adapter exists.
+    Gpu,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene.
+    Run {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Backend.
+        #[arg(long, value_enum, default_value = "auto")]
+        backend: Backend,
+        /// Output folder (default out/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override run.end_time.
+        #[arg(long)]
+        end_time: Option<f64>,
+        /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
+        #[arg(long)]
+        adapter: Option<String>,
+    },
+    /// Validate a scene and print its plan.
+    Check {
+        /// Scene file (TOML).
+        scene: PathBuf,
+    },
+}
+
+/// Exit status for bad input.
+const EXIT_INPUT: u8 = 2;
+/// Exit status for a run that went unstable.
+const EXIT_FAILED_RUN: u8 = 3;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match dispatch(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e}");
+            for cause in e.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            let input = e
+                .downcast_ref::<ricochet::Error>()
+                .map(|r| {
+                    matches!(
+                        r,
+                        ricochet::Error::Read { .. }
+                            | ricochet::Error::Parse { .. }
+                            | ricochet::Error::Invalid { .. }
+                    )
+                })
+                .unwrap_or(false);
+            ExitCode::from(if input { EXIT_INPUT } else { 1 })
+        }
+    }
+}
+
+fn load(path: &Path, end_time: Option<f64>) -> anyhow::Result<(Scene, Model, Plan)> {
+    let mut scene = Scene::load(path)?;
+    if let Some(t) = end_time {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(ricochet::Error::Invalid {
+                file: path.to_path_buf(),
+                key: "--end-time".into(),
+                value: format!("{t:?}"),
+                reason: "must be a positive finite number".into(),
+            }
+            .into());
+        }
+        scene.run.end_time = t;
+    }
+    let model = Model::build(&scene)?;
+    let plan = Plan::new(&scene, &model);
+    Ok((scene, model, plan))
+}
+
+fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
+    match cli.command {
+        Command::Check { scene } => {
+            let (scene, model, plan) = load(&scene, None)?;
+            check(&scene, model, &plan)?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Run {
+            scene,
+            backend,
+            out,
+            end_time,
+            adapter: _,
+        } => {
+            let (scene, model, plan) = load(&scene, end_time)?;
+            let out = out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+            let mut solver: Box<dyn Solver> = match backend {
+                Backend::Cpu => Box::new(CpuSolver::new(
+                    model.clone(),
+                    plan.clone(),
+                    ricochet::run::schedule(&scene),
+                )),
+                Backend::Auto => {
+                    eprintln!("notice: the GPU backend is not available yet; running on the CPU");
+                    Box::new(CpuSolver::new(
+                        model.clone(),
+                        plan.clone(),
+                        ricochet::run::schedule(&scene),
+                    ))
+                }
+                Backend::Gpu => {
+                    anyhow::bail!(
+                        "the GPU backend is not available in this build; use --backend cpu"
+                    )
+                }
+            };
+            let bar = progress_bar();
+            let mut tick = |t: f64, end: f64, steps: u64| {
+                if let Some(b) = &bar {
+                    b.set_position((t / end * 10_000.0).min(10_000.0) as u64);
+                    b.set_message(format!("t = {t:.4e} s, {steps} steps"));
+                }
+            };
+            let result = ricochet::run::run(
+                &scene,
+                &model,
+                &plan,
+                solver.as_mut(),
+                &out,
+                Some(&mut tick),
+            )
+            .with_context(|| format!("running {}", scene.file.display()))?;
+            if let Some(b) = bar {
+                b.finish_and_clear();
+            }
+            let s = &result.summary;
+            println!(
+                "{}: {} on {} ({}): {} steps to t = {:.4e} s in {:.2} s ({:.3e} element-cycles/s), max energy error {:.2e}; outputs in {}",
+                s.scene,
+                s.status,
+                s.backend,
+                s.adapter,
+                s.steps,
+                s.end_time,
+                s.wall_seconds,
+                s.element_cycles_per_second,
+                s.max_energy_error,
+                out.display()
+            );
+            if s.status != "completed" {
+                eprintln!("error: {}", s.message);
+                return Ok(ExitCode::from(EXIT_FAILED_RUN));
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+    }
+}
+
+fn progress_bar() -> Option<indicatif::ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = indicatif::ProgressBar::new(10_000);
+    let style = indicatif::ProgressStyle::with_template(
+        "{bar:40} {percent:>3}% {msg} [{per_sec}, ETA {eta}]",
+    )
+    .ok()?;
+    bar.set_style(style);
+    Some(bar)
+}
+
+fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
+    let schedule = ricochet::run::schedule(scene);
+    let solver = CpuSolver::new(model, plan.clone(), schedule);
+    let model = solver.model();
+    let (dt, e) = solver.stable_step();
+    let step = scene
+        .run
+        .time_step
+        .unwrap_or(scene.run.time_step_scale * dt);
+    if let Some(fixed) = scene.run.time_step {
+        if fixed > dt {
+            return Err(ricochet::Error::Invalid {
+                file: scene.file.clone(),
+                key: "run.time_step".into(),
+                value: format!("{fixed:e}"),
+                reason: format!("exceeds the stable step {dt:e} (set by element {e})"),
+            }
+            .into());
+        }
+    }
+    let steps = (scene.run.end_time / step).ceil() as u64;
+    println!("scene      {} ({})", scene.name, scene.file.display());
+    println!(
+        "model      {} nodes, {} elements, {} bodies, {} constrained nodes",
+        plan.nodes,
+        plan.elements,
+        model.bodies.len(),
+        plan.constrained_nodes
+    );
+    for b in &model.bodies {
+        println!(
+            "  body     {:<16} {} nodes, {} elements, mass {:.6e} kg, c_d {:.1} m/s, hourglass {:?}",
+            b.name,
+            b.nodes.len(),
+            b.elements.len(),
+            b.mass,
+            b.params.dilatational_speed(),
+            b.params.hourglass
+        );
+    }
+    println!(
+        "time step  stable {dt:.4e} s (element {e}); step {step:.4e} s; about {steps} steps to {:e} s",
+        scene.run.end_time
+    );
+    let bytes_cpu = plan.nodes * (8 * 2 * 4 + 8)
+        + plan.elements * (16 + 64 + 4)
+        + plan.elements * if plan.has_dissipation() { 48 } else { 0 };
+    println!(
+        "memory     about {:.1} MiB (CPU reference)",
+        bytes_cpu as f64 / 1048576.0
+    );
+    println!("plan       {plan}");
+    Ok(())
+}

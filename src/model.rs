@@ -1,0 +1,253 @@
+//! The model: a scene turned into flat arrays (nodes, elements, bodies, constraints).
+//!
+//! Reference coordinates are kept apart from displacements: every element stores its corners
+//! relative to its own centre, so that f32 keeps full precision far from the origin.
+
+use std::ops::Range;
+
+use crate::error::Result;
+use crate::mesh::Mesh;
+use crate::scene::{self, Scene};
+use crate::step::element::{min_corner_ratio, quad_geometry, ElementParams};
+
+/// One body's slice of the model.
+#[derive(Debug, Clone)]
+pub struct BodyModel {
+    /// Name.
+    pub name: String,
+    /// Its nodes, a contiguous range of global node indices.
+    pub nodes: Range<usize>,
+    /// Its elements, a contiguous range of global element indices.
+    pub elements: Range<usize>,
+    /// Element parameters.
+    pub params: ElementParams,
+    /// Total mass.
+    pub mass: f64,
+}
+
+/// A velocity constraint on one node.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeConstraint {
+    /// Global node index.
+    pub node: u32,
+    /// Prescribed x velocity, if any.
+    pub vx: Option<f64>,
+    /// Prescribed y velocity, if any.
+    pub vy: Option<f64>,
+}
+
+/// The whole model as flat arrays.
+#[derive(Debug, Clone)]
+pub struct Model {
+    /// Absolute reference coordinates of the nodes.
+    pub position: Vec<[f64; 2]>,
+    /// Lumped nodal masses.
+    pub mass: Vec<f64>,
+    /// Initial velocities.
+    pub velocity: Vec<[f64; 2]>,
+    /// Element connectivity (global node indices, counter-clockwise).
+    pub quads: Vec<[u32; 4]>,
+    /// Reference corner coordinates of each element relative to the element's centre.
+    pub corners: Vec<[[f64; 2]; 4]>,
+    /// Body of each element.
+    pub element_body: Vec<u32>,
+    /// Bodies.
+    pub bodies: Vec<BodyModel>,
+    /// Velocity constraints, sorted by node.
+    pub constraints: Vec<NodeConstraint>,
+}
+
+impl Model {
+    /// Builds the model of `scene`: meshes each body, lumps the mass, applies initial velocities
+    /// and collects the velocity constraints.
+    ///
+    /// # Errors
+    /// [`crate::Error::Invalid`] for a mesh with an inverted, zero-area or non-convex element, or a
+    /// boundary box that selects no node.
+    pub fn build(scene: &Scene) -> Result<Model> {
+        let mut m = Model {
+            position: Vec::new(),
+            mass: Vec::new(),
+            velocity: Vec::new(),
+            quads: Vec::new(),
+            corners: Vec::new(),
+            element_body: Vec::new(),
+            bodies: Vec::new(),
+            constraints: Vec::new(),
+        };
+        for (bi, body) in scene.bodies.iter().enumerate() {
+            let mesh = Mesh::generate(&body.mesh);
+            let material = &scene.materials[body.material];
+            let params = ElementParams::new(
+                material,
+                body.formulation,
+                body.thickness,
+                body.hourglass.form,
+                body.hourglass.coefficient,
+                (scene.run.bulk_linear, scene.run.bulk_quadratic),
+            );
+            let n0 = m.position.len();
+            let e0 = m.quads.len();
+            let mut mass = vec![0.0; mesh.nodes.len()];
+            for (qi, q) in mesh.quads.iter().enumerate() {
+                let x: [[f64; 2]; 4] = q.map(|i| mesh.nodes[i as usize]);
+                let g = quad_geometry(&x);
+                let corner = min_corner_ratio(&x, g.area);
+                if !(g.area > 0.0 && corner > 1e-8) {
+                    return Err(scene::invalid(
+                        scene,
+                        format!("body[{bi}].mesh"),
+                        format!("quad {qi} = {q:?}, area {:e}", g.area),
+                        "inverted, zero-area or non-convex element (quads must be convex and counter-clockwise)",
+                    ));
+                }
+                let lumped = lumped_mass(&x, params.density * params.thickness);
+                for a in 0..4 {
+                    mass[q[a] as usize] += lumped[a];
+                }
+                let cx = 0.25 * (x[0][0] + x[1][0] + x[2][0] + x[3][0]);
+                let cy = 0.25 * (x[0][1] + x[1][1] + x[2][1] + x[3][1]);
+                m.corners.push(x.map(|p| [p[0] - cx, p[1] - cy]));
+                m.quads.push(q.map(|i| i + n0 as u32));
+                m.element_body.push(bi as u32);
+            }
+            if let Some(i) = mass.iter().position(|&x| x <= 0.0) {
+                return Err(scene::invalid(
+                    scene,
+                    format!("body[{bi}].mesh"),
+                    format!("node {i}"),
+                    "node belongs to no element",
+                ));
+            }
+            let total: f64 = mass.iter().sum();
+            // Centroid for the angular velocity.
+            let (mut cx, mut cy) = (0.0, 0.0);
+            for (p, w) in mesh.nodes.iter().zip(&mass) {
+                cx += w * p[0];
+                cy += w * p[1];
+            }
+            cx /= total;
+            cy /= total;
+            for (p, w) in mesh.nodes.iter().zip(&mass) {
+                m.position
+                    .push([mesh.origin[0] + p[0], mesh.origin[1] + p[1]]);
+                m.mass.push(*w);
+                let om = body.angular_velocity;
+                let g = body.velocity_gradient;
+                let (rx, ry) = (p[0] - cx, p[1] - cy);
+                m.velocity.push([
+                    body.initial_velocity[0] - om * ry + g[0][0] * rx + g[0][1] * ry,
+                    body.initial_velocity[1] + om * rx + g[1][0] * rx + g[1][1] * ry,
+                ]);
+            }
+            m.bodies.push(BodyModel {
+                name: body.name.clone(),
+                nodes: n0..m.position.len(),
+                elements: e0..m.quads.len(),
+                params,
+                mass: total,
+            });
+        }
+        // Velocity constraints: later boundaries override earlier ones component-wise.
+        let mut cons: Vec<Option<NodeConstraint>> = vec![None; m.position.len()];
+        for b in &scene.boundaries {
+            let range = m.bodies[b.body].nodes.clone();
+            let mut hit = 0;
+            for n in range {
+                let p = m.position[n];
+                if p[0] >= b.min[0] && p[0] <= b.max[0] && p[1] >= b.min[1] && p[1] <= b.max[1] {
+                    hit += 1;
+                    let c = cons[n].get_or_insert(NodeConstraint {
+                        node: n as u32,
+                        vx: None,
+                        vy: None,
+                    });
+                    if b.vx.is_some() {
+                        c.vx = b.vx;
+                    }
+                    if b.vy.is_some() {
+                        c.vy = b.vy;
+                    }
+                }
+            }
+            if hit == 0 {
+                return Err(scene::invalid(
+                    scene,
+                    format!("{}.region", b.key),
+                    format!("{{ min = {:?}, max = {:?} }}", b.min, b.max),
+                    &format!(
+                        "the box selects no node of body {:?}",
+                        scene.bodies[b.body].name
+                    ),
+                ));
+            }
+        }
+        m.constraints = cons.into_iter().flatten().collect();
+        for c in &m.constraints {
+            let v = &mut m.velocity[c.node as usize];
+            if let Some(x) = c.vx {
+                v[0] = x;
+            }
+            if let Some(y) = c.vy {
+                v[1] = y;
+            }
+        }
+        Ok(m)
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.position.len()
+    }
+
+    /// Number of elements.
+    pub fn element_count(&self) -> usize {
+        self.quads.len()
+    }
+
+    /// Parameters of element `e`.
+    pub fn params(&self, e: usize) -> &ElementParams {
+        &self.bodies[self.element_body[e] as usize].params
+    }
+}
+
+/// Row-sum lumped masses of a bilinear quad: `rho_t * integral of N_a`, by 2x2 Gauss quadrature.
+pub fn lumped_mass(x: &[[f64; 2]; 4], rho_t: f64) -> [f64; 4] {
+    let g = 1.0 / 3f64.sqrt();
+    let mut m = [0.0; 4];
+    let xi_a = [-1.0, 1.0, 1.0, -1.0];
+    let eta_a = [-1.0, -1.0, 1.0, 1.0];
+    for (xi, eta) in [(-g, -g), (g, -g), (g, g), (-g, g)] {
+        // Jacobian of the bilinear map.
+        let mut j = [0.0; 4];
+        for a in 0..4 {
+            let dxi = 0.25 * xi_a[a] * (1.0 + eta_a[a] * eta);
+            let deta = 0.25 * eta_a[a] * (1.0 + xi_a[a] * xi);
+            j[0] += dxi * x[a][0];
+            j[1] += deta * x[a][0];
+            j[2] += dxi * x[a][1];
+            j[3] += deta * x[a][1];
+        }
+        let det = j[0] * j[3] - j[1] * j[2];
+        for a in 0..4 {
+            let n = 0.25 * (1.0 + xi_a[a] * xi) * (1.0 + eta_a[a] * eta);
+            m[a] += rho_t * n * det;
+        }
+    }
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lumped_mass_sums_to_element_mass() {
+        let x = [[0.0, 0.0], [2.0, 0.1], [2.3, 1.7], [-0.2, 1.1]];
+        let m = lumped_mass(&x, 3.0);
+        let area = quad_geometry(&x).area;
+        let total: f64 = m.iter().sum();
+        assert!((total - 3.0 * area).abs() < 1e-12 * total);
+        assert!(m.iter().all(|&w| w > 0.0));
+    }
+}

@@ -1,0 +1,46 @@
+//! `summary.json`: how the run ended and what it cost.
+
+use serde::Serialize;
+
+/// The run summary written to `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// "completed" or "failed".
+    pub status: String,
+    /// Empty when completed; the diagnostic when failed.
+    pub message: String,
+    /// Scene name.
+    pub scene: String,
+    /// "cpu" or "gpu".
+    pub backend: String,
+    /// Adapter or processor.
+    pub adapter: String,
+    /// Nodes.
+    pub nodes: usize,
+    /// Elements.
+    pub elements: usize,
+    /// Steps taken.
+    pub steps: u64,
+    /// Simulated time reached.
+    pub end_time: f64,
+    /// Wall-clock seconds of the time loop.
+    pub wall_seconds: f64,
+    /// Elements x steps / wall seconds.
+    pub element_cycles_per_second: f64,
+    /// Smallest step taken.
+    pub dt_min: f64,
+    /// Largest step taken.
+    pub dt_max: f64,
+    /// Largest relative energy-balance error over the history rows.
+    pub max_energy_error: f64,
+    /// Command-buffer submissions (GPU backend; 0 on the CPU).
+    pub gpu_submissions: u64,
+    /// Readbacks from the GPU (0 on the CPU).
+    pub gpu_readbacks: u64,
+    /// Seconds per stage where the backend measures them.
+    pub stage_seconds: Vec<(String, f64)>,
+    /// History rows written.
+    pub history_rows: usize,
+    /// Field snapshots written.
+    pub snapshots: usize,
+}

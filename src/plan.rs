@@ -1,0 +1,125 @@
+//! The step plan: which stages a scene needs. A scene pays only for what it uses.
+
+use std::fmt;
+
+use crate::model::Model;
+use crate::scene::{HourglassForm, Scene};
+
+/// A stage of the step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// Stress, nodal forces and stable step of every element.
+    ElementForces,
+    /// Viscous hourglass forces (bodies with the viscous form).
+    HourglassViscous,
+    /// Stiffness hourglass forces (bodies with the stiffness form).
+    HourglassStiffness,
+    /// Bulk viscosity in compression.
+    BulkViscosity,
+    /// Minimum reduction of the element stable steps.
+    StableStep,
+    /// Central-difference velocity and displacement update.
+    NodeUpdate,
+    /// Prescribed velocities.
+    VelocityBoundaries,
+    /// Energy audit and body velocities at history times.
+    History,
+    /// Field snapshots at field times.
+    Fields,
+}
+
+impl Stage {
+    /// Short name used in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::ElementForces => "element_forces",
+            Stage::HourglassViscous => "hourglass_viscous",
+            Stage::HourglassStiffness => "hourglass_stiffness",
+            Stage::BulkViscosity => "bulk_viscosity",
+            Stage::StableStep => "stable_step",
+            Stage::NodeUpdate => "node_update",
+            Stage::VelocityBoundaries => "velocity_boundaries",
+            Stage::History => "history",
+            Stage::Fields => "fields",
+        }
+    }
+}
+
+/// The stages a scene needs, and the sizes that decide cost.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// Stages in execution order.
+    pub stages: Vec<Stage>,
+    /// Nodes.
+    pub nodes: usize,
+    /// Elements.
+    pub elements: usize,
+    /// Elements of bodies with viscous hourglass control.
+    pub viscous_hourglass_elements: usize,
+    /// Elements of bodies with stiffness hourglass control.
+    pub stiffness_hourglass_elements: usize,
+    /// Constrained nodes.
+    pub constrained_nodes: usize,
+}
+
+impl Plan {
+    /// Builds the plan of a scene's model.
+    pub fn new(scene: &Scene, model: &Model) -> Plan {
+        let count = |form| {
+            model
+                .bodies
+                .iter()
+                .filter(|b| b.params.hourglass == form)
+                .map(|b| b.elements.len())
+                .sum::<usize>()
+        };
+        let viscous = count(HourglassForm::Viscous);
+        let stiffness = count(HourglassForm::Stiffness);
+        let mut stages = vec![Stage::ElementForces];
+        if viscous > 0 {
+            stages.push(Stage::HourglassViscous);
+        }
+        if stiffness > 0 {
+            stages.push(Stage::HourglassStiffness);
+        }
+        if model.bodies.iter().any(|b| b.params.has_bulk_viscosity()) {
+            stages.push(Stage::BulkViscosity);
+        }
+        if scene.run.time_step.is_none() {
+            stages.push(Stage::StableStep);
+        }
+        stages.push(Stage::NodeUpdate);
+        if !model.constraints.is_empty() {
+            stages.push(Stage::VelocityBoundaries);
+        }
+        stages.push(Stage::History);
+        if scene.run.field_interval.is_some() {
+            stages.push(Stage::Fields);
+        }
+        Plan {
+            stages,
+            nodes: model.node_count(),
+            elements: model.element_count(),
+            viscous_hourglass_elements: viscous,
+            stiffness_hourglass_elements: stiffness,
+            constrained_nodes: model.constraints.len(),
+        }
+    }
+
+    /// Whether the plan has `stage`.
+    pub fn has(&self, stage: Stage) -> bool {
+        self.stages.contains(&stage)
+    }
+
+    /// Whether any element keeps dissipative state between steps (viscous hourglass or bulk viscosity).
+    pub fn has_dissipation(&self) -> bool {
+        self.has(Stage::HourglassViscous) || self.has(Stage::BulkViscosity)
+    }
+}
+
+impl fmt::Display for Plan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let names: Vec<&str> = self.stages.iter().map(|s| s.name()).collect();
+        write!(f, "{}", names.join(" -> "))
+    }
+}

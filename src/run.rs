@@ -1,0 +1,152 @@
+//! The run driver: advances a [`Solver`], writes history, fields and summary, and stops on
+//! instability. Shared by both backends.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::error::Result;
+use crate::model::Model;
+use crate::output::fields::FieldWriter;
+use crate::output::history::{EnergyAudit, HistoryWriter};
+use crate::output::summary::Summary;
+use crate::output::{create_dir, write_file};
+use crate::plan::Plan;
+use crate::scene::Scene;
+use crate::step::{Event, Sample, Schedule, Solver};
+
+/// Progress callback: (simulated time, end time, steps).
+pub type Progress<'a> = &'a mut dyn FnMut(f64, f64, u64);
+
+/// The schedule of a scene's run.
+pub fn schedule(scene: &Scene) -> Schedule {
+    Schedule {
+        end_time: scene.run.end_time,
+        history_interval: scene.run.history_interval,
+        field_interval: scene.run.field_interval,
+        time_step_scale: scene.run.time_step_scale,
+        time_step: scene.run.time_step,
+    }
+}
+
+/// Everything a finished run produced, besides the files.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    /// The summary (also written to `summary.json`).
+    pub summary: Summary,
+    /// All history samples with their energy errors.
+    pub samples: Vec<(Sample, f64)>,
+    /// Output folder.
+    pub out_dir: PathBuf,
+}
+
+/// Runs `solver` to the end of `scene`, writing `history.csv`, `summary.json` and, when the scene
+/// asks for them, the fields into `out_dir`.
+///
+/// # Errors
+/// I/O errors on the outputs and backend failures. An unstable run is not an error: it ends with
+/// `status = "failed"` in the summary.
+pub fn run(
+    scene: &Scene,
+    model: &Model,
+    plan: &Plan,
+    solver: &mut dyn Solver,
+    out_dir: &Path,
+    progress: Option<Progress<'_>>,
+) -> Result<RunResult> {
+    create_dir(out_dir)?;
+    let bodies: Vec<String> = model.bodies.iter().map(|b| b.name.clone()).collect();
+    let mut history = HistoryWriter::create(&out_dir.join("history.csv"), &bodies)?;
+    let mut fields = match scene.run.field_interval {
+        Some(_) => Some(FieldWriter::new(out_dir)?),
+        None => None,
+    };
+    let mut audit = EnergyAudit::default();
+    let mut samples = Vec::new();
+    let mut events = Vec::new();
+    let mut failure: Option<String> = None;
+    let mut progress = progress;
+    let start = Instant::now();
+    let mut loop_seconds = 0.0;
+    'outer: loop {
+        let t0 = Instant::now();
+        solver.advance(&mut events)?;
+        loop_seconds += t0.elapsed().as_secs_f64();
+        for ev in events.drain(..) {
+            match ev {
+                Event::Sample(s) => {
+                    let err = audit.error(&s);
+                    history.row(&s, err)?;
+                    if err > scene.run.energy_error_limit {
+                        failure = Some(format!(
+                            "step {}, t = {:e} s: energy balance error {:.3e} exceeds run.energy_error_limit = {} \
+                             (kinetic {:e}, internal {:e}, hourglass {:e}, viscous {:e}, external {:e})",
+                            s.step, s.time, err, scene.run.energy_error_limit, s.kinetic, s.internal,
+                            s.hourglass, s.viscous, s.external
+                        ));
+                        samples.push((s, err));
+                        break 'outer;
+                    }
+                    samples.push((s, err));
+                }
+                Event::Snapshot(snap) => {
+                    if let Some(f) = fields.as_mut() {
+                        f.write(model, &snap)?;
+                    }
+                }
+                Event::Done => break 'outer,
+                Event::Failed(f) => {
+                    failure = Some(format!(
+                        "step {}, t = {:e} s: {}",
+                        f.step, f.time, f.message
+                    ));
+                    break 'outer;
+                }
+            }
+        }
+        if let Some(p) = progress.as_mut() {
+            p(solver.time(), scene.run.end_time, solver.steps());
+        }
+    }
+    history.finish()?;
+    let _ = start;
+    let counters = solver.counters();
+    let (dt_min, dt_max) = solver.dt_range();
+    let steps = solver.steps();
+    let summary = Summary {
+        status: if failure.is_some() {
+            "failed"
+        } else {
+            "completed"
+        }
+        .to_string(),
+        message: failure.unwrap_or_default(),
+        scene: scene.name.clone(),
+        backend: solver.backend().to_string(),
+        adapter: solver.adapter(),
+        nodes: plan.nodes,
+        elements: plan.elements,
+        steps,
+        end_time: solver.time(),
+        wall_seconds: loop_seconds,
+        element_cycles_per_second: if loop_seconds > 0.0 {
+            plan.elements as f64 * steps as f64 / loop_seconds
+        } else {
+            0.0
+        },
+        dt_min,
+        dt_max,
+        max_energy_error: audit.max_error,
+        gpu_submissions: counters.submissions,
+        gpu_readbacks: counters.readbacks,
+        stage_seconds: solver.stage_seconds(),
+        history_rows: samples.len(),
+        snapshots: fields.as_ref().map(|f| f.count()).unwrap_or(0),
+    };
+    let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
+    write_file(&out_dir.join("summary.json"), &(json + "\n"))?;
+    Ok(RunResult {
+        summary,
+        samples,
+        out_dir: out_dir.to_path_buf(),
+    })
+}

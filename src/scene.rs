@@ -1,0 +1,752 @@
+//! Scene files: the TOML format users write, and its validation into a [`Scene`].
+//!
+//! Every rejected value is reported as [`Error::Invalid`] with the file, the dotted key and the value.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+
+/// Default safety factor on the stable time step.
+pub const DEFAULT_TIME_STEP_SCALE: f64 = 0.9;
+/// Default linear bulk-viscosity coefficient (as in common explicit codes).
+pub const DEFAULT_BULK_LINEAR: f64 = 0.06;
+/// Default quadratic bulk-viscosity coefficient.
+pub const DEFAULT_BULK_QUADRATIC: f64 = 1.5;
+/// Default hourglass coefficient.
+pub const DEFAULT_HOURGLASS_COEFFICIENT: f64 = 0.1;
+/// Default bound on the relative energy-balance error before a run is stopped.
+pub const DEFAULT_ENERGY_ERROR_LIMIT: f64 = 0.05;
+
+// ---------------------------------------------------------------------------------------------
+// Raw file layout (serde). Unknown keys are errors so that typos are caught.
+// ---------------------------------------------------------------------------------------------
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    run: RawRun,
+    #[serde(default)]
+    material: Vec<RawMaterial>,
+    #[serde(default)]
+    body: Vec<RawBody>,
+    #[serde(default)]
+    boundary: Vec<RawBoundary>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRun {
+    end_time: f64,
+    time_step_scale: Option<f64>,
+    time_step: Option<f64>,
+    history_interval: Option<f64>,
+    field_interval: Option<f64>,
+    energy_error_limit: Option<f64>,
+    bulk_viscosity: Option<RawBulk>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBulk {
+    linear: Option<f64>,
+    quadratic: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMaterial {
+    name: String,
+    model: String,
+    density: f64,
+    youngs_modulus: f64,
+    poisson_ratio: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBody {
+    name: String,
+    material: String,
+    formulation: Option<String>,
+    thickness: Option<f64>,
+    mesh: RawMesh,
+    initial_velocity: Option<[f64; 2]>,
+    angular_velocity: Option<f64>,
+    velocity_gradient: Option<[[f64; 2]; 2]>,
+    hourglass: Option<RawHourglass>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMesh {
+    rectangle: Option<RawRectangle>,
+    disk: Option<RawDisk>,
+    nodes: Option<Vec<[f64; 2]>>,
+    quads: Option<Vec<[i64; 4]>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRectangle {
+    origin: [f64; 2],
+    size: [f64; 2],
+    cells: [i64; 2],
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDisk {
+    center: [f64; 2],
+    radius: f64,
+    cells: i64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawHourglass {
+    form: Option<String>,
+    coefficient: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBoundary {
+    body: String,
+    region: RawRegion,
+    velocity: RawVelocity,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRegion {
+    min: [f64; 2],
+    max: [f64; 2],
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawVelocity {
+    x: Option<f64>,
+    y: Option<f64>,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validated scene.
+// ---------------------------------------------------------------------------------------------
+
+/// Constitutive model of a material.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MaterialModel {
+    /// Small-strain linear elasticity (geometrically linear: for the textbook comparisons).
+    LinearElastic,
+    /// Compressible neo-Hookean hyperelasticity (finite strain, objective).
+    NeoHookean,
+}
+
+/// A material, validated.
+#[derive(Debug, Clone)]
+pub struct Material {
+    /// Name used by bodies.
+    pub name: String,
+    /// Constitutive model.
+    pub model: MaterialModel,
+    /// Mass density (kg/m^3).
+    pub density: f64,
+    /// Young's modulus (Pa).
+    pub youngs_modulus: f64,
+    /// Poisson's ratio, in (-1, 0.5).
+    pub poisson_ratio: f64,
+}
+
+/// 2D kinematic assumption of a body.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Formulation {
+    /// Plane strain (epsilon_zz = 0).
+    PlaneStrain,
+    /// Plane stress (sigma_zz = 0).
+    PlaneStress,
+}
+
+/// Hourglass control form.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HourglassForm {
+    /// No hourglass control.
+    None,
+    /// Flanagan-Belytschko viscous form (dissipative).
+    Viscous,
+    /// Flanagan-Belytschko stiffness form (conservative, energy stored).
+    Stiffness,
+}
+
+/// Hourglass control of a body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hourglass {
+    /// Which form.
+    pub form: HourglassForm,
+    /// Dimensionless coefficient (0.1 by default).
+    pub coefficient: f64,
+}
+
+/// How a body is meshed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MeshSpec {
+    /// Nodes and counter-clockwise quads given explicitly (absolute coordinates).
+    Explicit {
+        /// Node coordinates.
+        nodes: Vec<[f64; 2]>,
+        /// Quads as 0-based node indices, counter-clockwise.
+        quads: Vec<[u32; 4]>,
+    },
+    /// A structured grid over an axis-aligned rectangle.
+    Rectangle {
+        /// Lower-left corner.
+        origin: [f64; 2],
+        /// Width and height.
+        size: [f64; 2],
+        /// Cells along x and y.
+        cells: [usize; 2],
+    },
+    /// A structured O-grid disk: a square core and four curved blocks, no degenerate quads.
+    Disk {
+        /// Centre.
+        center: [f64; 2],
+        /// Radius.
+        radius: f64,
+        /// Cells along a quarter of the circumference (and across the core).
+        cells: usize,
+    },
+}
+
+/// A body, validated.
+#[derive(Debug, Clone)]
+pub struct Body {
+    /// Name.
+    pub name: String,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Plane strain or plane stress.
+    pub formulation: Formulation,
+    /// Out-of-plane thickness (m).
+    pub thickness: f64,
+    /// Mesh.
+    pub mesh: MeshSpec,
+    /// Initial rigid velocity.
+    pub initial_velocity: [f64; 2],
+    /// Initial angular velocity about the body's centroid (rad/s, counter-clockwise).
+    pub angular_velocity: f64,
+    /// Initial velocity gradient about the centroid, `[[dvx/dx, dvx/dy], [dvy/dx, dvy/dy]]` (1/s).
+    pub velocity_gradient: [[f64; 2]; 2],
+    /// Hourglass control.
+    pub hourglass: Hourglass,
+}
+
+/// A prescribed velocity on the nodes of a body inside a box.
+#[derive(Debug, Clone)]
+pub struct Boundary {
+    /// Index into [`Scene::bodies`].
+    pub body: usize,
+    /// Box lower corner.
+    pub min: [f64; 2],
+    /// Box upper corner.
+    pub max: [f64; 2],
+    /// Prescribed x velocity, if any.
+    pub vx: Option<f64>,
+    /// Prescribed y velocity, if any.
+    pub vy: Option<f64>,
+    /// Key prefix used in messages (`boundary[i]`).
+    pub key: String,
+}
+
+/// Run control, validated.
+#[derive(Debug, Clone)]
+pub struct RunSettings {
+    /// Simulated end time (s).
+    pub end_time: f64,
+    /// Safety factor on the stable step.
+    pub time_step_scale: f64,
+    /// Fixed step, if given.
+    pub time_step: Option<f64>,
+    /// Time between history rows.
+    pub history_interval: f64,
+    /// Time between field snapshots, if any.
+    pub field_interval: Option<f64>,
+    /// Relative energy-balance error that stops the run.
+    pub energy_error_limit: f64,
+    /// Linear bulk-viscosity coefficient.
+    pub bulk_linear: f64,
+    /// Quadratic bulk-viscosity coefficient.
+    pub bulk_quadratic: f64,
+}
+
+/// A validated scene.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Scene name (file stem).
+    pub name: String,
+    /// Source file.
+    pub file: PathBuf,
+    /// Run control.
+    pub run: RunSettings,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Bodies.
+    pub bodies: Vec<Body>,
+    /// Velocity boundary conditions.
+    pub boundaries: Vec<Boundary>,
+}
+
+impl Scene {
+    /// Reads and validates a scene file.
+    ///
+    /// # Errors
+    /// [`Error::Read`] when the file cannot be read, [`Error::Parse`] for TOML and shape errors
+    /// (unknown keys included), [`Error::Invalid`] for values that are out of range.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+            file: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses and validates scene text; `path` is used for the name and in messages.
+    ///
+    /// # Errors
+    /// As [`Scene::load`], without the read error.
+    pub fn parse(text: &str, path: &Path) -> Result<Self> {
+        let raw: RawScene = toml::from_str(text).map_err(|e| Error::Parse {
+            file: path.to_path_buf(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        let v = Validator { file: path };
+        v.scene(raw)
+    }
+}
+
+struct Validator<'a> {
+    file: &'a Path,
+}
+
+fn fmt_num(x: f64) -> String {
+    format!("{x:?}")
+}
+
+impl Validator<'_> {
+    fn invalid(&self, key: impl Into<String>, value: impl Into<String>, reason: &str) -> Error {
+        Error::Invalid {
+            file: self.file.to_path_buf(),
+            key: key.into(),
+            value: value.into(),
+            reason: reason.to_string(),
+        }
+    }
+
+    fn positive(&self, key: &str, x: f64) -> Result<f64> {
+        if x.is_finite() && x > 0.0 {
+            Ok(x)
+        } else {
+            Err(self.invalid(key, fmt_num(x), "must be a positive finite number"))
+        }
+    }
+
+    fn non_negative(&self, key: &str, x: f64) -> Result<f64> {
+        if x.is_finite() && x >= 0.0 {
+            Ok(x)
+        } else {
+            Err(self.invalid(key, fmt_num(x), "must be a finite number >= 0"))
+        }
+    }
+
+    fn finite(&self, key: &str, x: f64) -> Result<f64> {
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(self.invalid(key, fmt_num(x), "must be finite"))
+        }
+    }
+
+    fn scene(&self, raw: RawScene) -> Result<Scene> {
+        let run = self.run(&raw.run)?;
+        let mut materials: Vec<Material> = Vec::new();
+        for (i, m) in raw.material.iter().enumerate() {
+            let key = format!("material[{i}]");
+            if materials.iter().any(|o| o.name == m.name) {
+                return Err(self.invalid(
+                    format!("{key}.name"),
+                    format!("{:?}", m.name),
+                    "duplicate material name",
+                ));
+            }
+            materials.push(self.material(&key, m)?);
+        }
+        if raw.body.is_empty() {
+            return Err(self.invalid("body", "[]", "a scene needs at least one [[body]]"));
+        }
+        let mut bodies: Vec<Body> = Vec::new();
+        for (i, b) in raw.body.iter().enumerate() {
+            let key = format!("body[{i}]");
+            if bodies.iter().any(|o| o.name == b.name) {
+                return Err(self.invalid(
+                    format!("{key}.name"),
+                    format!("{:?}", b.name),
+                    "duplicate body name",
+                ));
+            }
+            bodies.push(self.body(&key, b, &materials)?);
+        }
+        let mut boundaries = Vec::new();
+        for (i, b) in raw.boundary.iter().enumerate() {
+            let key = format!("boundary[{i}]");
+            boundaries.push(self.boundary(&key, b, &bodies)?);
+        }
+        let name = self
+            .file
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scene".to_string());
+        Ok(Scene {
+            name,
+            file: self.file.to_path_buf(),
+            run,
+            materials,
+            bodies,
+            boundaries,
+        })
+    }
+
+    fn run(&self, r: &RawRun) -> Result<RunSettings> {
+        let end_time = self.positive("run.end_time", r.end_time)?;
+        let time_step_scale = match r.time_step_scale {
+            Some(s) => self.positive("run.time_step_scale", s)?,
+            None => DEFAULT_TIME_STEP_SCALE,
+        };
+        let time_step = r
+            .time_step
+            .map(|s| self.positive("run.time_step", s))
+            .transpose()?;
+        let history_interval = match r.history_interval {
+            Some(h) => self.positive("run.history_interval", h)?,
+            None => end_time / 1000.0,
+        };
+        let field_interval = r
+            .field_interval
+            .map(|f| self.positive("run.field_interval", f))
+            .transpose()?;
+        let energy_error_limit = match r.energy_error_limit {
+            Some(e) => self.positive("run.energy_error_limit", e)?,
+            None => DEFAULT_ENERGY_ERROR_LIMIT,
+        };
+        let (bulk_linear, bulk_quadratic) = match &r.bulk_viscosity {
+            Some(b) => (
+                match b.linear {
+                    Some(x) => self.non_negative("run.bulk_viscosity.linear", x)?,
+                    None => DEFAULT_BULK_LINEAR,
+                },
+                match b.quadratic {
+                    Some(x) => self.non_negative("run.bulk_viscosity.quadratic", x)?,
+                    None => DEFAULT_BULK_QUADRATIC,
+                },
+            ),
+            None => (DEFAULT_BULK_LINEAR, DEFAULT_BULK_QUADRATIC),
+        };
+        Ok(RunSettings {
+            end_time,
+            time_step_scale,
+            time_step,
+            history_interval,
+            field_interval,
+            energy_error_limit,
+            bulk_linear,
+            bulk_quadratic,
+        })
+    }
+
+    fn material(&self, key: &str, m: &RawMaterial) -> Result<Material> {
+        let model = match m.model.as_str() {
+            "linear_elastic" => MaterialModel::LinearElastic,
+            "neo_hookean" => MaterialModel::NeoHookean,
+            other => {
+                return Err(self.invalid(
+                    format!("{key}.model"),
+                    format!("{other:?}"),
+                    "unknown model; expected \"linear_elastic\" or \"neo_hookean\"",
+                ))
+            }
+        };
+        let density = self.positive(&format!("{key}.density"), m.density)?;
+        let youngs_modulus = self.positive(&format!("{key}.youngs_modulus"), m.youngs_modulus)?;
+        let nu = m.poisson_ratio;
+        if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
+            return Err(self.invalid(
+                format!("{key}.poisson_ratio"),
+                fmt_num(nu),
+                "must lie in (-1, 0.5)",
+            ));
+        }
+        Ok(Material {
+            name: m.name.clone(),
+            model,
+            density,
+            youngs_modulus,
+            poisson_ratio: nu,
+        })
+    }
+
+    fn body(&self, key: &str, b: &RawBody, materials: &[Material]) -> Result<Body> {
+        let material = materials
+            .iter()
+            .position(|m| m.name == b.material)
+            .ok_or_else(|| {
+                let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+                self.invalid(
+                    format!("{key}.material"),
+                    format!("{:?}", b.material),
+                    &format!("no material of that name (defined: {known:?})"),
+                )
+            })?;
+        let formulation = match b.formulation.as_deref() {
+            None | Some("plane_strain") => Formulation::PlaneStrain,
+            Some("plane_stress") => Formulation::PlaneStress,
+            Some(other) => {
+                return Err(self.invalid(
+                    format!("{key}.formulation"),
+                    format!("{other:?}"),
+                    "expected \"plane_strain\" or \"plane_stress\"",
+                ))
+            }
+        };
+        let thickness = match b.thickness {
+            Some(t) => self.positive(&format!("{key}.thickness"), t)?,
+            None => 1.0,
+        };
+        let mesh = self.mesh(&format!("{key}.mesh"), &b.mesh)?;
+        let v0 = b.initial_velocity.unwrap_or([0.0, 0.0]);
+        self.finite(&format!("{key}.initial_velocity"), v0[0])?;
+        self.finite(&format!("{key}.initial_velocity"), v0[1])?;
+        let angular_velocity = self.finite(
+            &format!("{key}.angular_velocity"),
+            b.angular_velocity.unwrap_or(0.0),
+        )?;
+        let velocity_gradient = b.velocity_gradient.unwrap_or([[0.0; 2]; 2]);
+        for row in &velocity_gradient {
+            for x in row {
+                self.finite(&format!("{key}.velocity_gradient"), *x)?;
+            }
+        }
+        let hourglass = match &b.hourglass {
+            None => Hourglass {
+                form: HourglassForm::Viscous,
+                coefficient: DEFAULT_HOURGLASS_COEFFICIENT,
+            },
+            Some(h) => {
+                let form = match h.form.as_deref() {
+                    None | Some("viscous") => HourglassForm::Viscous,
+                    Some("stiffness") => HourglassForm::Stiffness,
+                    Some("none") => HourglassForm::None,
+                    Some(other) => {
+                        return Err(self.invalid(
+                            format!("{key}.hourglass.form"),
+                            format!("{other:?}"),
+                            "expected \"viscous\", \"stiffness\" or \"none\"",
+                        ))
+                    }
+                };
+                let coefficient = match h.coefficient {
+                    Some(c) => self.non_negative(&format!("{key}.hourglass.coefficient"), c)?,
+                    None => DEFAULT_HOURGLASS_COEFFICIENT,
+                };
+                if coefficient > 1.0 {
+                    return Err(self.invalid(
+                        format!("{key}.hourglass.coefficient"),
+                        fmt_num(coefficient),
+                        "must not exceed 1.0 (typical values 0.03-0.15)",
+                    ));
+                }
+                let form = if coefficient == 0.0 {
+                    HourglassForm::None
+                } else {
+                    form
+                };
+                Hourglass { form, coefficient }
+            }
+        };
+        Ok(Body {
+            name: b.name.clone(),
+            material,
+            formulation,
+            thickness,
+            mesh,
+            initial_velocity: v0,
+            angular_velocity,
+            velocity_gradient,
+            hourglass,
+        })
+    }
+
+    fn mesh(&self, key: &str, m: &RawMesh) -> Result<MeshSpec> {
+        let given = [
+            m.rectangle.is_some(),
+            m.disk.is_some(),
+            m.nodes.is_some() || m.quads.is_some(),
+        ];
+        if given.iter().filter(|g| **g).count() != 1 {
+            return Err(self.invalid(
+                key,
+                "{...}",
+                "give exactly one of `rectangle = {...}`, `disk = {...}` or `nodes = [...], quads = [...]`",
+            ));
+        }
+        if m.nodes.is_some() || m.quads.is_some() {
+            let (Some(nodes), Some(quads)) = (&m.nodes, &m.quads) else {
+                return Err(self.invalid(
+                    key,
+                    "{...}",
+                    "an explicit mesh needs both `nodes` and `quads`",
+                ));
+            };
+            if quads.is_empty() {
+                return Err(self.invalid(format!("{key}.quads"), "[]", "no quads"));
+            }
+            for (i, p) in nodes.iter().enumerate() {
+                if !(p[0].is_finite() && p[1].is_finite()) {
+                    return Err(self.invalid(
+                        format!("{key}.nodes[{i}]"),
+                        format!("{p:?}"),
+                        "must be finite",
+                    ));
+                }
+            }
+            let mut out = Vec::with_capacity(quads.len());
+            for (i, q) in quads.iter().enumerate() {
+                if q.iter().any(|&n| n < 0 || n as usize >= nodes.len()) {
+                    return Err(self.invalid(
+                        format!("{key}.quads[{i}]"),
+                        format!("{q:?}"),
+                        &format!("node index out of range (0..{})", nodes.len()),
+                    ));
+                }
+                out.push(q.map(|n| n as u32));
+            }
+            return Ok(MeshSpec::Explicit {
+                nodes: nodes.clone(),
+                quads: out,
+            });
+        }
+        match (&m.rectangle, &m.disk) {
+            (Some(r), None) => {
+                let k = format!("{key}.rectangle");
+                self.finite(&format!("{k}.origin"), r.origin[0])?;
+                self.finite(&format!("{k}.origin"), r.origin[1])?;
+                for (i, s) in r.size.iter().enumerate() {
+                    if !(s.is_finite() && *s > 0.0) {
+                        return Err(self.invalid(
+                            format!("{k}.size"),
+                            format!("{:?}", r.size),
+                            &format!("component {i} must be positive"),
+                        ));
+                    }
+                }
+                for (i, c) in r.cells.iter().enumerate() {
+                    if *c < 1 || *c > 100_000 {
+                        return Err(self.invalid(
+                            format!("{k}.cells"),
+                            format!("{:?}", r.cells),
+                            &format!("component {i} must be between 1 and 100000"),
+                        ));
+                    }
+                }
+                Ok(MeshSpec::Rectangle {
+                    origin: r.origin,
+                    size: r.size,
+                    cells: [r.cells[0] as usize, r.cells[1] as usize],
+                })
+            }
+            (None, Some(d)) => {
+                let k = format!("{key}.disk");
+                self.finite(&format!("{k}.center"), d.center[0])?;
+                self.finite(&format!("{k}.center"), d.center[1])?;
+                let radius = self.positive(&format!("{k}.radius"), d.radius)?;
+                if d.cells < 2 || d.cells > 20_000 {
+                    return Err(self.invalid(
+                        format!("{k}.cells"),
+                        d.cells.to_string(),
+                        "must be between 2 and 20000 (cells along a quarter circumference)",
+                    ));
+                }
+                Ok(MeshSpec::Disk {
+                    center: d.center,
+                    radius,
+                    cells: d.cells as usize,
+                })
+            }
+            _ => Err(self.invalid(
+                key,
+                "{...}",
+                "give exactly one of `rectangle = {...}` or `disk = {...}`",
+            )),
+        }
+    }
+
+    fn boundary(&self, key: &str, b: &RawBoundary, bodies: &[Body]) -> Result<Boundary> {
+        let body = bodies
+            .iter()
+            .position(|x| x.name == b.body)
+            .ok_or_else(|| {
+                let known: Vec<&str> = bodies.iter().map(|m| m.name.as_str()).collect();
+                self.invalid(
+                    format!("{key}.body"),
+                    format!("{:?}", b.body),
+                    &format!("no body of that name (defined: {known:?})"),
+                )
+            })?;
+        for i in 0..2 {
+            self.finite(&format!("{key}.region.min"), b.region.min[i])?;
+            self.finite(&format!("{key}.region.max"), b.region.max[i])?;
+            if b.region.min[i] > b.region.max[i] {
+                return Err(self.invalid(
+                    format!("{key}.region"),
+                    format!("min = {:?}, max = {:?}", b.region.min, b.region.max),
+                    "min must not exceed max",
+                ));
+            }
+        }
+        if b.velocity.x.is_none() && b.velocity.y.is_none() {
+            return Err(self.invalid(
+                format!("{key}.velocity"),
+                "{}",
+                "prescribe at least one of `x` or `y`",
+            ));
+        }
+        if let Some(x) = b.velocity.x {
+            self.finite(&format!("{key}.velocity.x"), x)?;
+        }
+        if let Some(y) = b.velocity.y {
+            self.finite(&format!("{key}.velocity.y"), y)?;
+        }
+        Ok(Boundary {
+            body,
+            min: b.region.min,
+            max: b.region.max,
+            vx: b.velocity.x,
+            vy: b.velocity.y,
+            key: key.to_string(),
+        })
+    }
+}
+
+/// Builds an [`Error::Invalid`] for `scene` (used by later validation stages such as meshing).
+pub fn invalid(
+    scene: &Scene,
+    key: impl Into<String>,
+    value: impl Into<String>,
+    reason: &str,
+) -> Error {
+    Error::Invalid {
+        file: scene.file.clone(),
+        key: key.into(),
+        value: value.into(),
+        reason: reason.to_string(),
+    }
+}

@@ -1,0 +1,394 @@
+//! The CPU reference solver (f64, one thread). Every GPU kernel is tested against this path.
+
+use crate::error::Result;
+use crate::model::Model;
+use crate::plan::{Plan, Stage};
+
+use super::element::{evaluate, Dissipation};
+use super::{Clock, Event, Failure, Sample, Schedule, Snapshot, Solver};
+
+/// Explicit central-difference integration of a [`Model`] on the CPU.
+#[derive(Debug, Clone)]
+pub struct CpuSolver {
+    model: Model,
+    plan: Plan,
+    schedule: Schedule,
+    clock: Clock,
+    inv_mass: Vec<f64>,
+    /// Displacements u_n.
+    u: Vec<[f64; 2]>,
+    /// Half-step velocities (v^{n-1/2} before the node stage, v^{n+1/2} after).
+    v: Vec<[f64; 2]>,
+    /// v^{n-1/2}, kept on output steps only.
+    v_prev: Vec<[f64; 2]>,
+    /// Nodal forces f_n.
+    f: Vec<[f64; 2]>,
+    /// Dissipative element state (empty when the plan has none).
+    dissipation: Vec<Dissipation>,
+    hourglass_work: f64,
+    bulk_work: f64,
+    external_work: f64,
+    t: f64,
+    n: u64,
+    dt_prev: f64,
+    dt_first: f64,
+    dt_range: (f64, f64),
+    done: bool,
+}
+
+/// Result of one element stage.
+struct ElementStage {
+    dt_min: f64,
+    dt_element: usize,
+    strain: f64,
+    hourglass_stored: f64,
+}
+
+impl CpuSolver {
+    /// A solver at t = 0 with the model's initial velocities.
+    pub fn new(model: Model, plan: Plan, schedule: Schedule) -> Self {
+        let nn = model.node_count();
+        let ne = model.element_count();
+        let dissipation = if plan.has_dissipation() {
+            vec![Dissipation::default(); ne]
+        } else {
+            Vec::new()
+        };
+        Self {
+            inv_mass: model.mass.iter().map(|m| 1.0 / m).collect(),
+            u: vec![[0.0; 2]; nn],
+            v: model.velocity.clone(),
+            v_prev: vec![[0.0; 2]; nn],
+            f: vec![[0.0; 2]; nn],
+            dissipation,
+            model,
+            plan,
+            schedule,
+            clock: Clock::new(),
+            hourglass_work: 0.0,
+            bulk_work: 0.0,
+            external_work: 0.0,
+            t: 0.0,
+            n: 0,
+            dt_prev: 0.0,
+            dt_first: 0.0,
+            dt_range: (f64::INFINITY, 0.0),
+            done: false,
+        }
+    }
+
+    /// The model.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// Displacements u_n.
+    pub fn displacement(&self) -> &[[f64; 2]] {
+        &self.u
+    }
+
+    /// Current half-step velocities.
+    pub fn velocity(&self) -> &[[f64; 2]] {
+        &self.v
+    }
+
+    /// Stable step of the current state (without the safety factor), and the element that sets it.
+    pub fn stable_step(&self) -> (f64, usize) {
+        let mut best = (f64::INFINITY, 0);
+        for e in 0..self.model.element_count() {
+            let (ue, ve) = self.gather(e);
+            let out = evaluate(
+                self.model.params(e),
+                &self.model.corners[e],
+                &ue,
+                &ve,
+                &Dissipation::default(),
+                0.0,
+            );
+            if out.dt < best.0 {
+                best = (out.dt, e);
+            }
+        }
+        best
+    }
+
+    #[inline]
+    fn gather(&self, e: usize) -> ([[f64; 2]; 4], [[f64; 2]; 4]) {
+        let q = self.model.quads[e];
+        (q.map(|i| self.u[i as usize]), q.map(|i| self.v[i as usize]))
+    }
+
+    fn element_name(&self, e: usize) -> String {
+        let b = &self.model.bodies[self.model.element_body[e] as usize];
+        format!(
+            "element {e} (body {:?}, local element {})",
+            b.name,
+            e - b.elements.start
+        )
+    }
+
+    fn node_name(&self, i: usize) -> String {
+        let b = self
+            .model
+            .bodies
+            .iter()
+            .find(|b| b.nodes.contains(&i))
+            .map(|b| (b.name.as_str(), i - b.nodes.start))
+            .unwrap_or(("?", i));
+        format!("node {i} (body {:?}, local node {})", b.0, b.1)
+    }
+
+    fn fail(&mut self, events: &mut Vec<Event>, message: String) {
+        self.done = true;
+        events.push(Event::Failed(Failure {
+            step: self.n,
+            time: self.t,
+            message,
+        }));
+    }
+
+    fn element_stage(&mut self, need_energy: bool) -> std::result::Result<ElementStage, String> {
+        for f in &mut self.f {
+            *f = [0.0; 2];
+        }
+        let mut st = ElementStage {
+            dt_min: f64::INFINITY,
+            dt_element: 0,
+            strain: 0.0,
+            hourglass_stored: 0.0,
+        };
+        let keep = !self.dissipation.is_empty();
+        for e in 0..self.model.element_count() {
+            let q = self.model.quads[e];
+            let (ue, ve) = self.gather(e);
+            let prev = if keep {
+                self.dissipation[e]
+            } else {
+                Dissipation::default()
+            };
+            let out = evaluate(
+                self.model.params(e),
+                &self.model.corners[e],
+                &ue,
+                &ve,
+                &prev,
+                self.dt_prev,
+            );
+            if out.min_corner.is_nan() || out.min_corner <= 0.0 {
+                return Err(format!(
+                    "{} inverted: smallest corner Jacobian ratio {:.3e}; reduce time_step_scale, \
+                     refine the mesh or raise the hourglass coefficient",
+                    self.element_name(e),
+                    out.min_corner
+                ));
+            }
+            for a in 0..4 {
+                let n = q[a] as usize;
+                self.f[n][0] += out.force[a][0];
+                self.f[n][1] += out.force[a][1];
+            }
+            if out.dt < st.dt_min {
+                st.dt_min = out.dt;
+                st.dt_element = e;
+            }
+            if keep {
+                self.hourglass_work += out.hourglass_work;
+                self.bulk_work += out.bulk_work;
+                self.dissipation[e] = Dissipation {
+                    hourglass_q: out.hourglass_q,
+                    bulk_p: out.bulk_p,
+                };
+            }
+            if need_energy {
+                st.strain += out.strain_energy;
+                st.hourglass_stored += out.hourglass_stored;
+            }
+        }
+        Ok(st)
+    }
+
+    fn step(&mut self, events: &mut Vec<Event>) {
+        let s = self.schedule;
+        let sample_due = self.clock.sample_due(&s, self.t);
+        let snapshot_due = self.clock.snapshot_due(&s, self.t);
+        let at_end = Clock::at_end(&s, self.t);
+
+        // 1. Element stage.
+        let st = match self.element_stage(sample_due) {
+            Ok(st) => st,
+            Err(msg) => return self.fail(events, msg),
+        };
+        if !(st.dt_min.is_finite() && st.dt_min > 0.0) {
+            let msg = format!(
+                "stable step is {:e} at {}: the element is degenerate or its state is not finite",
+                st.dt_min,
+                self.element_name(st.dt_element)
+            );
+            return self.fail(events, msg);
+        }
+        // 2. The step dt^{n+1/2}.
+        let dt_next = match s.time_step {
+            Some(fixed) => {
+                if fixed > st.dt_min {
+                    let msg = format!(
+                        "the fixed time_step {fixed:e} exceeds the stable step {:e} of {}",
+                        st.dt_min,
+                        self.element_name(st.dt_element)
+                    );
+                    return self.fail(events, msg);
+                }
+                fixed
+            }
+            None => s.time_step_scale * st.dt_min,
+        };
+        self.dt_range = (self.dt_range.0.min(dt_next), self.dt_range.1.max(dt_next));
+        if self.n == 0 {
+            self.dt_first = dt_next;
+        } else if dt_next < 1e-6 * self.dt_first {
+            let msg = format!(
+                "the stable step collapsed to {dt_next:e} (first step {:e}) at {}",
+                self.dt_first,
+                self.element_name(st.dt_element)
+            );
+            return self.fail(events, msg);
+        }
+        // 3. Node stage.
+        let dt_n = if self.n == 0 {
+            0.5 * dt_next
+        } else {
+            0.5 * (self.dt_prev + dt_next)
+        };
+        let output = sample_due || snapshot_due;
+        if output {
+            self.v_prev.copy_from_slice(&self.v);
+        }
+        let mut bad = None;
+        for i in 0..self.v.len() {
+            let w = dt_n * self.inv_mass[i];
+            let v = &mut self.v[i];
+            v[0] += w * self.f[i][0];
+            v[1] += w * self.f[i][1];
+            if bad.is_none() && !(v[0].is_finite() && v[1].is_finite()) {
+                bad = Some(i);
+            }
+        }
+        if let Some(i) = bad {
+            let msg = format!(
+                "velocity of {} is not finite (force {:?}): the run went unstable",
+                self.node_name(i),
+                self.f[i]
+            );
+            return self.fail(events, msg);
+        }
+        if self.plan.has(Stage::VelocityBoundaries) {
+            for c in &self.model.constraints {
+                let i = c.node as usize;
+                let m = self.model.mass[i];
+                for (k, val) in [(0, c.vx), (1, c.vy)] {
+                    if let Some(val) = val {
+                        // Reaction impulse m (val - v_free); v^{n-1/2} = val.
+                        self.external_work += m * (val - self.v[i][k]) * val;
+                        self.v[i][k] = val;
+                    }
+                }
+            }
+        }
+        if output && self.n == 0 {
+            // v^{-1/2} = v_0 - dt_0 a_0 = 2 v_0 - v^{1/2}.
+            for (p, v) in self.v_prev.iter_mut().zip(&self.v) {
+                *p = [2.0 * p[0] - v[0], 2.0 * p[1] - v[1]];
+            }
+        }
+        // 4. Output at t_n.
+        if snapshot_due {
+            events.push(Event::Snapshot(Snapshot {
+                time: self.t,
+                step: self.n,
+                displacement: self.u.clone(),
+                velocity: self
+                    .v_prev
+                    .iter()
+                    .zip(&self.v)
+                    .map(|(a, b)| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])])
+                    .collect(),
+            }));
+            self.clock.took_snapshot(&s, self.t);
+        }
+        if sample_due {
+            let mut kinetic = 0.0;
+            for i in 0..self.v.len() {
+                let (a, b) = (self.v_prev[i], self.v[i]);
+                kinetic += 0.5 * self.model.mass[i] * (a[0] * b[0] + a[1] * b[1]);
+            }
+            let body_velocity = self
+                .model
+                .bodies
+                .iter()
+                .map(|b| {
+                    let mut p = [0.0; 2];
+                    for i in b.nodes.clone() {
+                        let m = self.model.mass[i];
+                        p[0] += m * 0.5 * (self.v_prev[i][0] + self.v[i][0]);
+                        p[1] += m * 0.5 * (self.v_prev[i][1] + self.v[i][1]);
+                    }
+                    [p[0] / b.mass, p[1] / b.mass]
+                })
+                .collect();
+            events.push(Event::Sample(Sample {
+                time: self.t,
+                step: self.n,
+                dt: dt_next,
+                kinetic,
+                internal: st.strain,
+                hourglass: st.hourglass_stored + self.hourglass_work,
+                viscous: self.bulk_work,
+                external: self.external_work,
+                body_velocity,
+            }));
+            self.clock.took_sample(&s, self.t);
+        }
+        if at_end {
+            self.done = true;
+            events.push(Event::Done);
+            return;
+        }
+        // 5. Displacement update.
+        for (u, v) in self.u.iter_mut().zip(&self.v) {
+            u[0] += dt_next * v[0];
+            u[1] += dt_next * v[1];
+        }
+        self.t += dt_next;
+        self.dt_prev = dt_next;
+        self.n += 1;
+    }
+}
+
+impl Solver for CpuSolver {
+    fn advance(&mut self, events: &mut Vec<Event>) -> Result<()> {
+        let start = events.len();
+        while !self.done && events.len() == start {
+            self.step(events);
+        }
+        Ok(())
+    }
+
+    fn steps(&self) -> u64 {
+        self.n
+    }
+
+    fn time(&self) -> f64 {
+        self.t
+    }
+
+    fn dt_range(&self) -> (f64, f64) {
+        self.dt_range
+    }
+
+    fn backend(&self) -> &'static str {
+        "cpu"
+    }
+
+    fn adapter(&self) -> String {
+        "CPU reference (f64, 1 thread)".to_string()
+    }
+}

@@ -1,0 +1,528 @@
+//! The element stage, CPU reference: one-point 4-node quad in total-Lagrangian form.
+//!
+//! For each element, from its reference node offsets `dx`, displacements `u` and the lagged
+//! half-step velocities `v` (v^{n-1/2}), it computes
+//! - the nodal forces (`f = -A0 t P b0` for the stress, plus hourglass and bulk-viscosity forces),
+//! - the stable step of the element from the current geometry,
+//! - the strain energy and stored hourglass energy (conservative parts),
+//! - the increments of dissipated work of the viscous parts, with the trapezoidal pairing that
+//!   makes the discrete energy balance close exactly for fixed steps (see [`ElementOut`]).
+//!
+//! The WGSL element kernel (`shaders/element.wgsl`) follows this function line by line in f32.
+
+use crate::scene::{Formulation, HourglassForm, Material, MaterialModel};
+
+/// The sign vector of the hourglass mode of a 4-node quad.
+pub const HOURGLASS_BASE: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
+
+/// Constitutive and control parameters shared by all elements of one body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ElementParams {
+    /// Constitutive model.
+    pub model: MaterialModel,
+    /// Plane strain or plane stress.
+    pub formulation: Formulation,
+    /// Reference density.
+    pub density: f64,
+    /// Thickness.
+    pub thickness: f64,
+    /// 3D Lame constant lambda.
+    pub lambda: f64,
+    /// Shear modulus.
+    pub mu: f64,
+    /// In-plane effective lambda (plane stress: 2 lambda mu / (lambda + 2 mu)).
+    pub lambda_plane: f64,
+    /// Modulus that sets the element's fastest (dilatational) mode: lambda_plane + 2 mu + max(lambda_plane, 0).
+    pub wave_modulus: f64,
+    /// Hourglass form.
+    pub hourglass: HourglassForm,
+    /// Hourglass coefficient.
+    pub hourglass_coefficient: f64,
+    /// Linear bulk-viscosity coefficient (0 = off).
+    pub bulk_linear: f64,
+    /// Quadratic bulk-viscosity coefficient (0 = off).
+    pub bulk_quadratic: f64,
+}
+
+impl ElementParams {
+    /// Builds the parameters of a body from its material, formulation and thickness.
+    pub fn new(
+        material: &Material,
+        formulation: Formulation,
+        thickness: f64,
+        hourglass: HourglassForm,
+        hourglass_coefficient: f64,
+        bulk: (f64, f64),
+    ) -> Self {
+        let e = material.youngs_modulus;
+        let nu = material.poisson_ratio;
+        let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let mu = e / (2.0 * (1.0 + nu));
+        let lambda_plane = match formulation {
+            Formulation::PlaneStrain => lambda,
+            Formulation::PlaneStress => 2.0 * lambda * mu / (lambda + 2.0 * mu),
+        };
+        Self {
+            model: material.model,
+            formulation,
+            density: material.density,
+            thickness,
+            lambda,
+            mu,
+            lambda_plane,
+            wave_modulus: lambda_plane + 2.0 * mu + lambda_plane.max(0.0),
+            hourglass,
+            hourglass_coefficient,
+            bulk_linear: bulk.0,
+            bulk_quadratic: bulk.1,
+        }
+    }
+
+    /// Dilatational wave speed of the formulation, sqrt((lambda_plane + 2 mu) / rho).
+    pub fn dilatational_speed(&self) -> f64 {
+        ((self.lambda_plane + 2.0 * self.mu) / self.density).sqrt()
+    }
+
+    /// Whether the bulk viscosity is on.
+    pub fn has_bulk_viscosity(&self) -> bool {
+        self.bulk_linear > 0.0 || self.bulk_quadratic > 0.0
+    }
+}
+
+/// What one element evaluation produces.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ElementOut {
+    /// Nodal forces (external minus internal) of the element on its 4 nodes.
+    pub force: [[f64; 2]; 4],
+    /// Stable step of the element (without the safety factor).
+    pub dt: f64,
+    /// Strain energy.
+    pub strain_energy: f64,
+    /// Energy stored in the stiffness hourglass springs.
+    pub hourglass_stored: f64,
+    /// Viscous hourglass generalized force Q_i (force on node a is -gamma_a Q_i).
+    pub hourglass_q: [f64; 2],
+    /// Bulk-viscosity first Piola-Kirchhoff stress (xx, xy, yx, yy).
+    pub bulk_p: [f64; 4],
+    /// Work dissipated by the viscous hourglass forces over the last step (pairing n-1 and n).
+    pub hourglass_work: f64,
+    /// Work dissipated by the bulk viscosity over the last step.
+    pub bulk_work: f64,
+    /// Smallest corner Jacobian ratio of the current geometry (<= 0: inverted).
+    pub min_corner: f64,
+    /// Cauchy stress (xx, yy, xy, zz).
+    pub stress: [f64; 4],
+    /// Deformation gradient (xx, xy, yx, yy).
+    pub def_grad: [f64; 4],
+}
+
+/// Dissipative state of an element from the previous step, for the trapezoidal work pairing.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Dissipation {
+    /// Viscous hourglass generalized force of the previous step.
+    pub hourglass_q: [f64; 2],
+    /// Bulk-viscosity stress of the previous step.
+    pub bulk_p: [f64; 4],
+}
+
+/// Reference geometry of a quad at its centre: area and shape-function gradients.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuadGeometry {
+    /// Area.
+    pub area: f64,
+    /// dN_a/dX at the centre, per node.
+    pub bx: [f64; 4],
+    /// dN_a/dY at the centre, per node.
+    pub by: [f64; 4],
+    /// Flanagan-Belytschko hourglass vector gamma_a.
+    pub gamma: [f64; 4],
+}
+
+/// Centre gradients and hourglass vector of the quad with corners `x` (counter-clockwise).
+pub fn quad_geometry(x: &[[f64; 2]; 4]) -> QuadGeometry {
+    let (x1, x2, x3, x4) = (x[0][0], x[1][0], x[2][0], x[3][0]);
+    let (y1, y2, y3, y4) = (x[0][1], x[1][1], x[2][1], x[3][1]);
+    let area = 0.5 * ((x3 - x1) * (y4 - y2) - (x4 - x2) * (y3 - y1));
+    let s = 0.5 / area;
+    let bx = [s * (y2 - y4), s * (y3 - y1), s * (y4 - y2), s * (y1 - y3)];
+    let by = [s * (x4 - x2), s * (x1 - x3), s * (x2 - x4), s * (x3 - x1)];
+    let h = HOURGLASS_BASE;
+    let hx = h[0] * x1 + h[1] * x2 + h[2] * x3 + h[3] * x4;
+    let hy = h[0] * y1 + h[1] * y2 + h[2] * y3 + h[3] * y4;
+    let gamma = [
+        h[0] - hx * bx[0] - hy * by[0],
+        h[1] - hx * bx[1] - hy * by[1],
+        h[2] - hx * bx[2] - hy * by[2],
+        h[3] - hx * bx[3] - hy * by[3],
+    ];
+    QuadGeometry {
+        area,
+        bx,
+        by,
+        gamma,
+    }
+}
+
+/// Characteristic length of a quad: area over max(longest side, longest diagonal / sqrt 2).
+/// Equal to the side for a square, to the short side for a thin rectangle.
+pub fn characteristic_length(x: &[[f64; 2]; 4], area: f64) -> f64 {
+    let d = |a: usize, b: usize| {
+        let dx = x[b][0] - x[a][0];
+        let dy = x[b][1] - x[a][1];
+        dx * dx + dy * dy
+    };
+    let side = d(0, 1).max(d(1, 2)).max(d(2, 3)).max(d(3, 0));
+    let diag = 0.5 * d(0, 2).max(d(1, 3));
+    area / side.max(diag).sqrt()
+}
+
+/// Smallest corner Jacobian of `x`, relative to the quad's area (1 for a parallelogram).
+pub fn min_corner_ratio(x: &[[f64; 2]; 4], area: f64) -> f64 {
+    let mut m = f64::INFINITY;
+    for a in 0..4 {
+        let p = x[(a + 3) % 4];
+        let c = x[a];
+        let n = x[(a + 1) % 4];
+        let cross = (n[0] - c[0]) * (p[1] - c[1]) - (n[1] - c[1]) * (p[0] - c[0]);
+        m = m.min(cross);
+    }
+    if area.abs() > 0.0 {
+        m / area.abs()
+    } else {
+        m
+    }
+}
+
+fn det(f: &[f64; 4]) -> f64 {
+    f[0] * f[3] - f[1] * f[2]
+}
+
+/// Evaluates one element. `dx`: reference corner offsets; `u`, `v`: corner displacements and
+/// lagged velocities; `prev`: the dissipative state of the previous step; `dt_prev`: the step
+/// that took u^{n-1} to u^n (0 on the first step, which dissipates nothing).
+pub fn evaluate(
+    p: &ElementParams,
+    dx: &[[f64; 2]; 4],
+    u: &[[f64; 2]; 4],
+    v: &[[f64; 2]; 4],
+    prev: &Dissipation,
+    dt_prev: f64,
+) -> ElementOut {
+    let g = quad_geometry(dx);
+    let a0t = g.area * p.thickness;
+    // Deformation gradient F = I + sum_a u_a (x) b_a and its rate.
+    let mut f = [1.0, 0.0, 0.0, 1.0];
+    let mut fd = [0.0; 4];
+    for a in 0..4 {
+        f[0] += u[a][0] * g.bx[a];
+        f[1] += u[a][0] * g.by[a];
+        f[2] += u[a][1] * g.bx[a];
+        f[3] += u[a][1] * g.by[a];
+        fd[0] += v[a][0] * g.bx[a];
+        fd[1] += v[a][0] * g.by[a];
+        fd[2] += v[a][1] * g.bx[a];
+        fd[3] += v[a][1] * g.by[a];
+    }
+    let j = det(&f);
+    // Stress (first Piola-Kirchhoff, xx xy yx yy) and strain energy density.
+    let (pk, w, cauchy) = stress(p, &f, j);
+
+    // Current geometry.
+    let x: [[f64; 2]; 4] = std::array::from_fn(|a| [dx[a][0] + u[a][0], dx[a][1] + u[a][1]]);
+    let area = 0.5
+        * ((x[2][0] - x[0][0]) * (x[3][1] - x[1][1]) - (x[3][0] - x[1][0]) * (x[2][1] - x[0][1]));
+    let min_corner = min_corner_ratio(&x, g.area);
+    let length = characteristic_length(&x, area.abs());
+    let rho = p.density * g.area / area.abs().max(f64::MIN_POSITIVE);
+    let c = (p.wave_modulus / rho).sqrt();
+
+    let mut force = [[0.0; 2]; 4];
+    for a in 0..4 {
+        force[a][0] = -a0t * (pk[0] * g.bx[a] + pk[1] * g.by[a]);
+        force[a][1] = -a0t * (pk[2] * g.bx[a] + pk[3] * g.by[a]);
+    }
+
+    // Hourglass control (Flanagan-Belytschko), on the reference gamma.
+    let bb: f64 = (0..4).map(|a| g.bx[a] * g.bx[a] + g.by[a] * g.by[a]).sum();
+    let gg: f64 = g.gamma.iter().map(|x| x * x).sum();
+    let mut hourglass_stored = 0.0;
+    let mut hourglass_q = [0.0; 2];
+    let mut hourglass_work = 0.0;
+    match p.hourglass {
+        HourglassForm::None => {}
+        HourglassForm::Stiffness => {
+            let k = p.hourglass_coefficient * (p.lambda_plane + 2.0 * p.mu) * a0t * bb / gg;
+            let mut q = [0.0; 2];
+            for a in 0..4 {
+                q[0] += g.gamma[a] * u[a][0];
+                q[1] += g.gamma[a] * u[a][1];
+            }
+            for a in 0..4 {
+                force[a][0] -= k * g.gamma[a] * q[0];
+                force[a][1] -= k * g.gamma[a] * q[1];
+            }
+            hourglass_stored = 0.5 * k * (q[0] * q[0] + q[1] * q[1]);
+        }
+        HourglassForm::Viscous => {
+            let c0 = (p.wave_modulus / p.density).sqrt();
+            let damp = p.hourglass_coefficient * p.density * c0 * a0t * bb.sqrt() / gg;
+            let mut qd = [0.0; 2];
+            for a in 0..4 {
+                qd[0] += g.gamma[a] * v[a][0];
+                qd[1] += g.gamma[a] * v[a][1];
+            }
+            hourglass_q = [damp * qd[0], damp * qd[1]];
+            for a in 0..4 {
+                force[a][0] -= g.gamma[a] * hourglass_q[0];
+                force[a][1] -= g.gamma[a] * hourglass_q[1];
+            }
+            // Dissipated: 1/2 (gamma . du)(Q^{n-1} + Q^n), du = dt_prev v^{n-1/2}.
+            hourglass_work = 0.5
+                * dt_prev
+                * (qd[0] * (prev.hourglass_q[0] + hourglass_q[0])
+                    + qd[1] * (prev.hourglass_q[1] + hourglass_q[1]));
+        }
+    }
+
+    // Bulk viscosity: pressure q in compression, acting as Cauchy stress -q I.
+    let mut bulk_p = [0.0; 4];
+    let mut bulk_work = 0.0;
+    let mut dt = length / c;
+    if p.has_bulk_viscosity() {
+        // Volumetric strain rate tr(Fdot F^-1) (= tr Fdot for the small-strain model).
+        let rate = match p.model {
+            MaterialModel::LinearElastic => fd[0] + fd[3],
+            MaterialModel::NeoHookean => {
+                (fd[0] * f[3] - fd[1] * f[2] - fd[2] * f[1] + fd[3] * f[0]) / j
+            }
+        };
+        if rate < 0.0 {
+            let q =
+                rho * length * (p.bulk_quadratic * length * rate * rate - p.bulk_linear * c * rate);
+            bulk_p = match p.model {
+                MaterialModel::LinearElastic => [-q, 0.0, 0.0, -q],
+                // -q J F^-T = -q cof(F)
+                MaterialModel::NeoHookean => [-q * f[3], q * f[2], q * f[1], -q * f[0]],
+            };
+            let qs = p.bulk_linear * c + p.bulk_quadratic * length * (-rate);
+            dt = length / (qs + (qs * qs + c * c).sqrt());
+        }
+        for a in 0..4 {
+            force[a][0] -= a0t * (bulk_p[0] * g.bx[a] + bulk_p[1] * g.by[a]);
+            force[a][1] -= a0t * (bulk_p[2] * g.bx[a] + bulk_p[3] * g.by[a]);
+        }
+        // Dissipated: 1/2 A0 t (P^{n-1} + P^n) : dH, dH = dt_prev Fdot.
+        bulk_work = 0.5
+            * a0t
+            * dt_prev
+            * ((prev.bulk_p[0] + bulk_p[0]) * fd[0]
+                + (prev.bulk_p[1] + bulk_p[1]) * fd[1]
+                + (prev.bulk_p[2] + bulk_p[2]) * fd[2]
+                + (prev.bulk_p[3] + bulk_p[3]) * fd[3]);
+    }
+
+    ElementOut {
+        force,
+        dt,
+        strain_energy: w * a0t,
+        hourglass_stored,
+        hourglass_q,
+        bulk_p,
+        hourglass_work,
+        bulk_work,
+        min_corner,
+        stress: cauchy,
+        def_grad: f,
+    }
+}
+
+/// First Piola-Kirchhoff stress (xx xy yx yy), strain energy per reference volume, and the Cauchy
+/// stress (xx yy xy zz) for the deformation gradient `f` with determinant `j`.
+pub fn stress(p: &ElementParams, f: &[f64; 4], j: f64) -> ([f64; 4], f64, [f64; 4]) {
+    match p.model {
+        MaterialModel::LinearElastic => {
+            let exx = f[0] - 1.0;
+            let eyy = f[3] - 1.0;
+            let exy = 0.5 * (f[1] + f[2]);
+            let tr = exx + eyy;
+            let sxx = p.lambda_plane * tr + 2.0 * p.mu * exx;
+            let syy = p.lambda_plane * tr + 2.0 * p.mu * eyy;
+            let sxy = 2.0 * p.mu * exy;
+            let szz = match p.formulation {
+                Formulation::PlaneStrain => p.lambda * tr,
+                Formulation::PlaneStress => 0.0,
+            };
+            let w = 0.5 * (sxx * exx + syy * eyy + 2.0 * sxy * exy);
+            ([sxx, sxy, sxy, syy], w, [sxx, syy, sxy, szz])
+        }
+        MaterialModel::NeoHookean => {
+            // F33 = 1 (plane strain) or from sigma_33 = 0 (plane stress, Newton on ln-form).
+            let f33 = match p.formulation {
+                Formulation::PlaneStrain => 1.0,
+                Formulation::PlaneStress => plane_stress_stretch(p.lambda, p.mu, j),
+            };
+            let jj = j * f33;
+            let ln_j = jj.ln();
+            // F^-T = cof(F)/J2 : (xx xy yx yy) of F^-T = [f3, -f2, -f1, f0]/j
+            let fit = [f[3] / j, -f[2] / j, -f[1] / j, f[0] / j];
+            let pk: [f64; 4] =
+                std::array::from_fn(|i| p.mu * (f[i] - fit[i]) + p.lambda * ln_j * fit[i]);
+            let i1 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2] + f[3] * f[3] + f33 * f33;
+            let w = 0.5 * p.mu * (i1 - 3.0 - 2.0 * ln_j) + 0.5 * p.lambda * ln_j * ln_j;
+            // Cauchy = P F^T / J
+            let sxx = (pk[0] * f[0] + pk[1] * f[1]) / jj;
+            let sxy = (pk[0] * f[2] + pk[1] * f[3]) / jj;
+            let syy = (pk[2] * f[2] + pk[3] * f[3]) / jj;
+            let szz = match p.formulation {
+                Formulation::PlaneStrain => (p.mu * (1.0 - 1.0) + p.lambda * ln_j) / jj,
+                Formulation::PlaneStress => 0.0,
+            };
+            (pk, w, [sxx, syy, sxy, szz])
+        }
+    }
+}
+
+/// Out-of-plane stretch of a plane-stress neo-Hookean element with in-plane Jacobian `j2`:
+/// the root of mu (z^2 - 1) + lambda ln(j2 z) = 0, by a fixed number of Newton steps.
+pub fn plane_stress_stretch(lambda: f64, mu: f64, j2: f64) -> f64 {
+    let ln_j2 = j2.ln();
+    // Small-strain start: z = 1 - lambda ln j2 / (2 mu + lambda).
+    let mut z = (1.0 - lambda * ln_j2 / (2.0 * mu + lambda)).max(0.1);
+    for _ in 0..6 {
+        let g = mu * (z * z - 1.0) + lambda * (ln_j2 + z.ln());
+        let dg = 2.0 * mu * z + lambda / z;
+        z -= g / dg;
+    }
+    z
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn steel(model: MaterialModel) -> Material {
+        Material {
+            name: "steel".into(),
+            model,
+            density: 7850.0,
+            youngs_modulus: 210e9,
+            poisson_ratio: 0.3,
+        }
+    }
+
+    fn params(model: MaterialModel, form: Formulation, hg: HourglassForm) -> ElementParams {
+        ElementParams::new(&steel(model), form, 1.0, hg, 0.1, (0.0, 0.0))
+    }
+
+    const SQUARE: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+
+    #[test]
+    fn gamma_is_orthogonal_to_linear_fields() {
+        let x = [[0.0, 0.0], [2.0, 0.1], [2.3, 1.7], [-0.2, 1.1]];
+        let g = quad_geometry(&x);
+        let sx: f64 = (0..4).map(|a| g.gamma[a] * x[a][0]).sum();
+        let sy: f64 = (0..4).map(|a| g.gamma[a] * x[a][1]).sum();
+        let s1: f64 = g.gamma.iter().sum();
+        assert!(sx.abs() < 1e-12 && sy.abs() < 1e-12 && s1.abs() < 1e-12);
+        // b reproduces the gradient of linear fields
+        let gx: f64 = (0..4).map(|a| g.bx[a] * x[a][0]).sum();
+        let gy: f64 = (0..4).map(|a| g.by[a] * x[a][0]).sum();
+        assert!((gx - 1.0).abs() < 1e-12 && gy.abs() < 1e-12);
+    }
+
+    #[test]
+    fn plane_stress_neo_hookean_has_zero_szz_and_matches_linear_for_small_strain() {
+        let p = params(
+            MaterialModel::NeoHookean,
+            Formulation::PlaneStress,
+            HourglassForm::None,
+        );
+        let pl = params(
+            MaterialModel::LinearElastic,
+            Formulation::PlaneStress,
+            HourglassForm::None,
+        );
+        let e = 1e-6;
+        let f = [1.0 + e, 0.3 * e, 0.3 * e, 1.0 - 0.5 * e];
+        let (pk, _, _) = stress(&p, &f, det(&f));
+        let (pkl, _, _) = stress(&pl, &f, det(&f));
+        for i in 0..4 {
+            assert!(
+                (pk[i] - pkl[i]).abs() < 1e-4 * 210e9 * e,
+                "{i}: {} vs {}",
+                pk[i],
+                pkl[i]
+            );
+        }
+        // residual of the sigma_33 = 0 condition
+        let z = plane_stress_stretch(p.lambda, p.mu, 0.7);
+        let g = p.mu * (z * z - 1.0) + p.lambda * (0.7f64 * z).ln();
+        assert!(g.abs() < 1e-6 * p.mu);
+    }
+
+    #[test]
+    fn hourglass_mode_is_resisted_only_with_control() {
+        // Pure hourglass displacement: u_x = d * h_a. One-point quadrature sees no strain.
+        let d = 1e-4;
+        let u: [[f64; 2]; 4] = std::array::from_fn(|a| [d * HOURGLASS_BASE[a], 0.0]);
+        let zero = [[0.0; 2]; 4];
+        let none = params(
+            MaterialModel::LinearElastic,
+            Formulation::PlaneStrain,
+            HourglassForm::None,
+        );
+        let out = evaluate(&none, &SQUARE, &u, &zero, &Dissipation::default(), 0.0);
+        assert!(out.strain_energy.abs() < 1e-6);
+        assert!(out
+            .force
+            .iter()
+            .all(|f| f[0].abs() < 1e-3 && f[1].abs() < 1e-3));
+        let stiff = params(
+            MaterialModel::LinearElastic,
+            Formulation::PlaneStrain,
+            HourglassForm::Stiffness,
+        );
+        let out = evaluate(&stiff, &SQUARE, &u, &zero, &Dissipation::default(), 0.0);
+        // Restoring: the force opposes the mode, and the work of the force equals the stored energy.
+        let work: f64 = (0..4).map(|a| out.force[a][0] * u[a][0]).sum();
+        assert!(work < 0.0);
+        assert!(out.hourglass_stored > 0.0);
+        assert!((-0.5 * work - out.hourglass_stored).abs() < 1e-9 * out.hourglass_stored);
+        let visc = params(
+            MaterialModel::LinearElastic,
+            Formulation::PlaneStrain,
+            HourglassForm::Viscous,
+        );
+        let out = evaluate(&visc, &SQUARE, &zero, &u, &Dissipation::default(), 1e-7);
+        let power: f64 = (0..4).map(|a| out.force[a][0] * u[a][0]).sum();
+        assert!(
+            power < 0.0,
+            "viscous hourglass force must oppose the hourglass velocity"
+        );
+        assert!(out.hourglass_work > 0.0);
+    }
+
+    #[test]
+    fn stable_step_of_a_square_matches_the_dilatational_mode() {
+        // nu = 0 plane stress: the 1D bar limit dt = h / c.
+        let m = Material {
+            name: "m".into(),
+            model: MaterialModel::LinearElastic,
+            density: 7850.0,
+            youngs_modulus: 210e9,
+            poisson_ratio: 0.0,
+        };
+        let p = ElementParams::new(
+            &m,
+            Formulation::PlaneStress,
+            1.0,
+            HourglassForm::None,
+            0.0,
+            (0.0, 0.0),
+        );
+        let zero = [[0.0; 2]; 4];
+        let out = evaluate(&p, &SQUARE, &zero, &zero, &Dissipation::default(), 0.0);
+        let c = (210e9f64 / 7850.0).sqrt();
+        assert!((out.dt - 1.0 / c).abs() < 1e-12 / c);
+    }
+}

@@ -1,0 +1,186 @@
+//! Time stepping: the explicit central-difference step and what both backends share.
+//!
+//! One step, as in the explicit flowchart (Belytschko, Box X.?):
+//! 1. element stage: nodal forces f_n from u_n (and the lagged v^{n-1/2} for the viscous parts),
+//!    the element stable steps, and on output steps the energies;
+//! 2. dt^{n+1/2} = min over elements x `time_step_scale` (or the fixed step);
+//! 3. node stage: v^{n+1/2} = v^{n-1/2} + dt_n M^-1 f_n with dt_n = (dt^{n-1/2} + dt^{n+1/2}) / 2
+//!    (dt^{1/2} / 2 on the first step), then the velocity boundary conditions;
+//! 4. output at t_n when due; stop when t_n >= end_time;
+//! 5. u_{n+1} = u_n + dt^{n+1/2} v^{n+1/2}, t_{n+1} = t_n + dt^{n+1/2}.
+
+pub mod cpu;
+pub mod element;
+
+use crate::error::Result;
+
+/// When samples, snapshots and the end fall, as both backends decide them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Schedule {
+    /// Simulated end time.
+    pub end_time: f64,
+    /// Time between samples (history rows).
+    pub history_interval: f64,
+    /// Time between snapshots, if any.
+    pub field_interval: Option<f64>,
+    /// Safety factor on the stable step.
+    pub time_step_scale: f64,
+    /// Fixed step, if any.
+    pub time_step: Option<f64>,
+}
+
+/// Relative slack on time comparisons, so that t_n = k * interval up to round-off counts as due.
+pub const TIME_SLACK: f64 = 1e-9;
+
+/// Tracks the next due sample and snapshot.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Clock {
+    /// Index of the next sample time.
+    pub next_sample: u64,
+    /// Index of the next snapshot time.
+    pub next_snapshot: u64,
+}
+
+impl Clock {
+    /// A clock at t = 0 with everything due.
+    pub fn new() -> Self {
+        Self {
+            next_sample: 0,
+            next_snapshot: 0,
+        }
+    }
+
+    /// Whether t_n is at or past the end.
+    pub fn at_end(s: &Schedule, t: f64) -> bool {
+        t >= s.end_time * (1.0 - TIME_SLACK)
+    }
+
+    /// Whether a sample is due at `t` (always at the end).
+    pub fn sample_due(&self, s: &Schedule, t: f64) -> bool {
+        Self::at_end(s, t) || t >= self.next_sample as f64 * s.history_interval * (1.0 - TIME_SLACK)
+    }
+
+    /// Whether a snapshot is due at `t` (always at the end when snapshots are on).
+    pub fn snapshot_due(&self, s: &Schedule, t: f64) -> bool {
+        match s.field_interval {
+            Some(fi) => {
+                Self::at_end(s, t) || t >= self.next_snapshot as f64 * fi * (1.0 - TIME_SLACK)
+            }
+            None => false,
+        }
+    }
+
+    /// Advances the sample index past `t`.
+    pub fn took_sample(&mut self, s: &Schedule, t: f64) {
+        self.next_sample = (t / s.history_interval * (1.0 + TIME_SLACK)).floor() as u64 + 1;
+    }
+
+    /// Advances the snapshot index past `t`.
+    pub fn took_snapshot(&mut self, s: &Schedule, t: f64) {
+        if let Some(fi) = s.field_interval {
+            self.next_snapshot = (t / fi * (1.0 + TIME_SLACK)).floor() as u64 + 1;
+        }
+    }
+}
+
+impl Default for Clock {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Energies and body velocities at t_n (one history row before the error column).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sample {
+    /// t_n.
+    pub time: f64,
+    /// n.
+    pub step: u64,
+    /// dt^{n+1/2}.
+    pub dt: f64,
+    /// Kinetic energy in the conserved form 1/2 v^{n-1/2} M v^{n+1/2}.
+    pub kinetic: f64,
+    /// Strain energy.
+    pub internal: f64,
+    /// Hourglass energy: stored (stiffness form) plus dissipated (viscous form).
+    pub hourglass: f64,
+    /// Work dissipated by the bulk viscosity.
+    pub viscous: f64,
+    /// Work done on the model by prescribed velocities.
+    pub external: f64,
+    /// Per body: momentum / mass at t_n.
+    pub body_velocity: Vec<[f64; 2]>,
+}
+
+/// Nodal state at t_n for field output.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    /// t_n.
+    pub time: f64,
+    /// n.
+    pub step: u64,
+    /// Displacements u_n.
+    pub displacement: Vec<[f64; 2]>,
+    /// Velocities at t_n, (v^{n-1/2} + v^{n+1/2}) / 2.
+    pub velocity: Vec<[f64; 2]>,
+}
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Failure {
+    /// Step at which it was detected.
+    pub step: u64,
+    /// Time at which it was detected.
+    pub time: f64,
+    /// What went wrong, naming the element or node.
+    pub message: String,
+}
+
+/// What a solver reports while it advances.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event {
+    /// A history sample.
+    Sample(Sample),
+    /// A field snapshot.
+    Snapshot(Snapshot),
+    /// The run reached its end time.
+    Done,
+    /// The run went unstable.
+    Failed(Failure),
+}
+
+/// Counters a backend reports in the summary.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Counters {
+    /// Command-buffer submissions (GPU).
+    pub submissions: u64,
+    /// Readbacks from the device (GPU).
+    pub readbacks: u64,
+}
+
+/// A time integrator of a model: the CPU reference or the GPU backend.
+pub trait Solver {
+    /// Advances at least one step, until one or more events happened, and appends them.
+    ///
+    /// # Errors
+    /// Only for backend failures (a lost device); instability is an [`Event::Failed`].
+    fn advance(&mut self, events: &mut Vec<Event>) -> Result<()>;
+    /// Steps taken so far.
+    fn steps(&self) -> u64;
+    /// Current simulated time.
+    fn time(&self) -> f64;
+    /// Backend name ("cpu" or "gpu").
+    fn backend(&self) -> &'static str;
+    /// Adapter or processor description.
+    fn adapter(&self) -> String;
+    /// Smallest and largest step taken so far.
+    fn dt_range(&self) -> (f64, f64);
+    /// Submission and readback counters.
+    fn counters(&self) -> Counters {
+        Counters::default()
+    }
+    /// Optional per-stage timings (stage name, seconds).
+    fn stage_seconds(&self) -> Vec<(String, f64)> {
+        Vec::new()
+    }
+}
