@@ -8,6 +8,8 @@
 //! ([`step::cpu`]) or on the GPU ([`gpu`]); [`run`] drives a solver and writes the [`output`].
 
 #![warn(missing_docs)]
+// Index loops over element corners read like the formulas they implement.
+#![allow(clippy::needless_range_loop)]
 
 pub mod error;
 pub mod gpu;

@@ -374,7 +374,7 @@ pub fn stress(p: &ElementParams, f: &[f64; 4], j: f64) -> ([f64; 4], f64, [f64; 
             let sxy = (pk[0] * f[2] + pk[1] * f[3]) / jj;
             let syy = (pk[2] * f[2] + pk[3] * f[3]) / jj;
             let szz = match p.formulation {
-                Formulation::PlaneStrain => (p.mu * (1.0 - 1.0) + p.lambda * ln_j) / jj,
+                Formulation::PlaneStrain => p.lambda * ln_j / jj,
                 Formulation::PlaneStress => 0.0,
             };
             (pk, w, [sxx, syy, sxy, szz])
