@@ -11,6 +11,7 @@
 // Index loops over element corners read like the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+pub mod bench;
 pub mod error;
 pub mod gpu;
 pub mod mesh;

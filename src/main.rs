@@ -7,11 +7,13 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 
+use ricochet::gpu::{GpuContext, GpuSolver};
 use ricochet::model::Model;
 use ricochet::plan::Plan;
 use ricochet::scene::Scene;
 use ricochet::step::cpu::CpuSolver;
 use ricochet::step::Solver;
+use std::sync::Arc;
 
 #[derive(Parser)]
 #[command(
@@ -34,6 +36,18 @@ enum Backend {
     Gpu,
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BenchBackend {
+    /// Both when a GPU exists, else the CPU.
+    Auto,
+    /// CPU reference only.
+    Cpu,
+    /// GPU only.
+    Gpu,
+    /// CPU and GPU in the same run (ratios comparable).
+    Both,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Run a scene.
@@ -49,6 +63,24 @@ enum Command {
         /// Override run.end_time.
         #[arg(long)]
         end_time: Option<f64>,
+        /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
+        #[arg(long)]
+        adapter: Option<String>,
+    },
+    /// Throughput benchmark on a generated N x N block (no contact).
+    Bench {
+        /// Backend(s).
+        #[arg(long, value_enum, default_value = "auto")]
+        backend: BenchBackend,
+        /// Cells per side (elements = N^2); several allowed.
+        #[arg(long, num_args = 1.., default_values_t = [32usize, 100, 316, 1000])]
+        cells: Vec<usize>,
+        /// Steps timed per size.
+        #[arg(long, default_value_t = 200)]
+        steps: u64,
+        /// Also write the table as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
         /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
         #[arg(long)]
         adapter: Option<String>,
@@ -111,6 +143,45 @@ fn load(path: &Path, end_time: Option<f64>) -> anyhow::Result<(Scene, Model, Pla
 
 fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
+        Command::Bench {
+            backend,
+            cells,
+            steps,
+            json,
+            adapter,
+        } => {
+            let ctx = match backend {
+                BenchBackend::Cpu => None,
+                BenchBackend::Auto => GpuContext::new(adapter.as_deref()).ok().map(Arc::new),
+                BenchBackend::Gpu | BenchBackend::Both => {
+                    Some(Arc::new(GpuContext::new(adapter.as_deref())?))
+                }
+            };
+            let run_cpu = matches!(
+                backend,
+                BenchBackend::Cpu | BenchBackend::Both | BenchBackend::Auto
+            );
+            let mut rows = Vec::new();
+            for &n in &cells {
+                if n == 0 {
+                    anyhow::bail!("--cells must be positive");
+                }
+                if run_cpu {
+                    rows.push(ricochet::bench::cpu(n, steps)?);
+                    eprint!("{}", ricochet::bench::table(&rows[rows.len() - 1..]));
+                }
+                if let Some(ctx) = &ctx {
+                    rows.push(ricochet::bench::gpu(ctx.clone(), n, steps)?);
+                    eprint!("{}", ricochet::bench::table(&rows[rows.len() - 1..]));
+                }
+            }
+            println!("{}", ricochet::bench::table(&rows));
+            if let Some(path) = json {
+                std::fs::write(&path, serde_json::to_string_pretty(&rows)?)
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Check { scene } => {
             let (scene, model, plan) = load(&scene, None)?;
             check(&scene, model, &plan)?;
@@ -121,28 +192,26 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             backend,
             out,
             end_time,
-            adapter: _,
+            adapter,
         } => {
             let (scene, model, plan) = load(&scene, end_time)?;
             let out = out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+            let schedule = ricochet::run::schedule(&scene);
+            let cpu = || -> Box<dyn Solver> {
+                Box::new(CpuSolver::new(model.clone(), plan.clone(), schedule))
+            };
             let mut solver: Box<dyn Solver> = match backend {
-                Backend::Cpu => Box::new(CpuSolver::new(
-                    model.clone(),
-                    plan.clone(),
-                    ricochet::run::schedule(&scene),
-                )),
-                Backend::Auto => {
-                    eprintln!("notice: the GPU backend is not available yet; running on the CPU");
-                    Box::new(CpuSolver::new(
-                        model.clone(),
-                        plan.clone(),
-                        ricochet::run::schedule(&scene),
-                    ))
-                }
+                Backend::Cpu => cpu(),
+                Backend::Auto => match GpuContext::new(adapter.as_deref()) {
+                    Ok(ctx) => Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?),
+                    Err(e) => {
+                        eprintln!("notice: {e}; running on the CPU");
+                        cpu()
+                    }
+                },
                 Backend::Gpu => {
-                    anyhow::bail!(
-                        "the GPU backend is not available in this build; use --backend cpu"
-                    )
+                    let ctx = GpuContext::new(adapter.as_deref())?;
+                    Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?)
                 }
             };
             let bar = progress_bar();

@@ -1,1 +1,23 @@
-//! The GPU backend (WGSL compute kernels through wgpu).
+//! The GPU backend: WGSL compute kernels through wgpu, headless.
+//!
+//! Kernels (one `.wgsl` in `shaders/` beside each `.rs` here): [`element`] (stress and forces per
+//! element), [`reduce`] (stable-step minimum, sample sums), [`control`] (step control on the GPU),
+//! [`node`] (gather, central-difference update, energies on sample steps), [`boundary`]
+//! (prescribed velocities). [`kernels::Kernels`] holds the compiled pipelines,
+//! [`state::GpuState`] the buffers, [`solver::GpuSolver`] drives them in batches of steps.
+//! All sums are gathers or fixed-order trees: the same scene on the same adapter gives the same bits.
+
+pub mod boundary;
+pub mod context;
+pub mod control;
+pub mod element;
+pub mod kernels;
+pub mod layout;
+pub mod node;
+pub mod reduce;
+pub mod shader;
+pub mod solver;
+pub mod state;
+
+pub use context::GpuContext;
+pub use solver::GpuSolver;

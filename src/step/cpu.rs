@@ -92,6 +92,18 @@ impl CpuSolver {
         &self.v
     }
 
+    /// Takes `n` steps, discarding outputs (for benchmarks).
+    pub fn run_steps(&mut self, n: u64) {
+        let mut events = Vec::new();
+        for _ in 0..n {
+            if self.done {
+                break;
+            }
+            self.step(&mut events);
+            events.clear();
+        }
+    }
+
     /// Stable step of the current state (without the safety factor), and the element that sets it.
     pub fn stable_step(&self) -> (f64, usize) {
         let mut best = (f64::INFINITY, 0);
@@ -209,9 +221,9 @@ impl CpuSolver {
 
     fn step(&mut self, events: &mut Vec<Event>) {
         let s = self.schedule;
-        let sample_due = self.clock.sample_due(&s, self.t);
-        let snapshot_due = self.clock.snapshot_due(&s, self.t);
-        let at_end = Clock::at_end(&s, self.t);
+        let sample_due = self.clock.sample_due(&s, self.t, self.dt_prev);
+        let snapshot_due = self.clock.snapshot_due(&s, self.t, self.dt_prev);
+        let at_end = Clock::at_end(&s, self.t, self.dt_prev);
 
         // 1. Element stage.
         let st = match self.element_stage(sample_due) {
@@ -241,7 +253,6 @@ impl CpuSolver {
             }
             None => s.time_step_scale * st.dt_min,
         };
-        self.dt_range = (self.dt_range.0.min(dt_next), self.dt_range.1.max(dt_next));
         if self.n == 0 {
             self.dt_first = dt_next;
         } else if dt_next < 1e-6 * self.dt_first {
@@ -251,6 +262,16 @@ impl CpuSolver {
                 self.element_name(st.dt_element)
             );
             return self.fail(events, msg);
+        }
+        // The last step ends exactly at end_time.
+        let remaining = s.end_time - self.t;
+        let dt_next = if remaining > 0.0 {
+            dt_next.min(remaining)
+        } else {
+            dt_next
+        };
+        if remaining > dt_next || self.n == 0 {
+            self.dt_range = (self.dt_range.0.min(dt_next), self.dt_range.1.max(dt_next));
         }
         // 3. Node stage.
         let dt_n = if self.n == 0 {
@@ -280,18 +301,22 @@ impl CpuSolver {
             );
             return self.fail(events, msg);
         }
+        // Work of the reactions: with impulse j_n = m (val - v_free) and v^{n-1/2} = v^{n+1/2} = val,
+        // the conserved energy E_n gains val (j_0 + ... + j_{n-1} + j_n / 2): the impulse of step n
+        // is shared with the interval that follows (see `Sample::external`).
+        let mut step_work = 0.0;
         if self.plan.has(Stage::VelocityBoundaries) {
             for c in &self.model.constraints {
                 let i = c.node as usize;
                 let m = self.model.mass[i];
                 for (k, val) in [(0, c.vx), (1, c.vy)] {
                     if let Some(val) = val {
-                        // Reaction impulse m (val - v_free); v^{n-1/2} = val.
-                        self.external_work += m * (val - self.v[i][k]) * val;
+                        step_work += m * (val - self.v[i][k]) * val;
                         self.v[i][k] = val;
                     }
                 }
             }
+            self.external_work += step_work;
         }
         if output && self.n == 0 {
             // v^{-1/2} = v_0 - dt_0 a_0 = 2 v_0 - v^{1/2}.
@@ -312,7 +337,7 @@ impl CpuSolver {
                     .map(|(a, b)| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])])
                     .collect(),
             }));
-            self.clock.took_snapshot(&s, self.t);
+            self.clock.took_snapshot(&s, self.t, self.dt_prev);
         }
         if sample_due {
             let mut kinetic = 0.0;
@@ -342,10 +367,10 @@ impl CpuSolver {
                 internal: st.strain,
                 hourglass: st.hourglass_stored + self.hourglass_work,
                 viscous: self.bulk_work,
-                external: self.external_work,
+                external: self.external_work - 0.5 * step_work,
                 body_velocity,
             }));
-            self.clock.took_sample(&s, self.t);
+            self.clock.took_sample(&s, self.t, self.dt_prev);
         }
         if at_end {
             self.done = true;

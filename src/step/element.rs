@@ -296,7 +296,9 @@ pub fn evaluate(
                 (fd[0] * f[3] - fd[1] * f[2] - fd[2] * f[1] + fd[3] * f[0]) / j
             }
         };
-        if rate < 0.0 {
+        // Compression only, and not for round-off rates (rigid motion): the strain rate over one
+        // wave transit of the element must exceed 1e-9.
+        if rate * length < -1e-9 * c {
             let q =
                 rho * length * (p.bulk_quadratic * length * rate * rate - p.bulk_linear * c * rate);
             bulk_p = match p.model {
@@ -304,9 +306,11 @@ pub fn evaluate(
                 // -q J F^-T = -q cof(F)
                 MaterialModel::NeoHookean => [-q * f[3], q * f[2], q * f[1], -q * f[0]],
             };
-            let qs = p.bulk_linear * c + p.bulk_quadratic * length * (-rate);
-            dt = length / (qs + (qs * qs + c * c).sqrt());
         }
+        // Stable step with the viscosity: the linear part always (so that dt does not jump when
+        // an element switches between compression and expansion), the quadratic part in compression.
+        let qs = p.bulk_linear * c + p.bulk_quadratic * length * (-rate).max(0.0);
+        dt = length / (qs + (qs * qs + c * c).sqrt());
         for a in 0..4 {
             force[a][0] -= a0t * (bulk_p[0] * g.bx[a] + bulk_p[1] * g.by[a]);
             force[a][1] -= a0t * (bulk_p[2] * g.bx[a] + bulk_p[3] * g.by[a]);

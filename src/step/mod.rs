@@ -29,15 +29,16 @@ pub struct Schedule {
     pub time_step: Option<f64>,
 }
 
-/// Relative slack on time comparisons, so that t_n = k * interval up to round-off counts as due.
-pub const TIME_SLACK: f64 = 1e-9;
+/// A time is due when t_n >= T - TIME_SLACK * dt^{n-1/2}: a small fraction of the last step, so
+/// that t_n = T up to round-off (f64 on the CPU, f32 steps on the GPU) counts as due on both.
+pub const TIME_SLACK: f64 = 0.01;
 
 /// Tracks the next due sample and snapshot.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Clock {
-    /// Index of the next sample time.
+    /// Index k of the next sample time k * history_interval.
     pub next_sample: u64,
-    /// Index of the next snapshot time.
+    /// Index k of the next snapshot time k * field_interval.
     pub next_snapshot: u64,
 }
 
@@ -50,35 +51,44 @@ impl Clock {
         }
     }
 
+    fn due(t: f64, dt_prev: f64, target: f64) -> bool {
+        t + TIME_SLACK * dt_prev >= target
+    }
+
     /// Whether t_n is at or past the end.
-    pub fn at_end(s: &Schedule, t: f64) -> bool {
-        t >= s.end_time * (1.0 - TIME_SLACK)
+    pub fn at_end(s: &Schedule, t: f64, dt_prev: f64) -> bool {
+        Self::due(t, dt_prev, s.end_time)
     }
 
     /// Whether a sample is due at `t` (always at the end).
-    pub fn sample_due(&self, s: &Schedule, t: f64) -> bool {
-        Self::at_end(s, t) || t >= self.next_sample as f64 * s.history_interval * (1.0 - TIME_SLACK)
+    pub fn sample_due(&self, s: &Schedule, t: f64, dt_prev: f64) -> bool {
+        Self::at_end(s, t, dt_prev)
+            || Self::due(t, dt_prev, self.next_sample as f64 * s.history_interval)
     }
 
     /// Whether a snapshot is due at `t` (always at the end when snapshots are on).
-    pub fn snapshot_due(&self, s: &Schedule, t: f64) -> bool {
+    pub fn snapshot_due(&self, s: &Schedule, t: f64, dt_prev: f64) -> bool {
         match s.field_interval {
             Some(fi) => {
-                Self::at_end(s, t) || t >= self.next_snapshot as f64 * fi * (1.0 - TIME_SLACK)
+                Self::at_end(s, t, dt_prev) || Self::due(t, dt_prev, self.next_snapshot as f64 * fi)
             }
             None => false,
         }
     }
 
-    /// Advances the sample index past `t`.
-    pub fn took_sample(&mut self, s: &Schedule, t: f64) {
-        self.next_sample = (t / s.history_interval * (1.0 + TIME_SLACK)).floor() as u64 + 1;
+    /// Advances the sample index past every time due at `t`.
+    pub fn took_sample(&mut self, s: &Schedule, t: f64, dt_prev: f64) {
+        while Self::due(t, dt_prev, self.next_sample as f64 * s.history_interval) {
+            self.next_sample += 1;
+        }
     }
 
-    /// Advances the snapshot index past `t`.
-    pub fn took_snapshot(&mut self, s: &Schedule, t: f64) {
+    /// Advances the snapshot index past every time due at `t`.
+    pub fn took_snapshot(&mut self, s: &Schedule, t: f64, dt_prev: f64) {
         if let Some(fi) = s.field_interval {
-            self.next_snapshot = (t / fi * (1.0 + TIME_SLACK)).floor() as u64 + 1;
+            while Self::due(t, dt_prev, self.next_snapshot as f64 * fi) {
+                self.next_snapshot += 1;
+            }
         }
     }
 }

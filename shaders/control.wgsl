@@ -1,0 +1,233 @@
+// Run control on the GPU, one workgroup, so that a batch of steps needs no readback.
+// control_dt: second level of the stable-step reduction, checks, dt^{n+1/2} and dt_n.
+// control_end: second level of the sample sums and the history row, then t_{n+1}, the flags of the
+//   next step (sample / snapshot / end, same rules as step::Clock) and the indirect dispatch sizes.
+
+const RG: u32 = 256u;
+const MAX_INSTANCES: u32 = 72u;
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read_write> ctrl: Control;
+@group(0) @binding(2) var<storage, read> dt_partial: array<vec2<u32>>;
+@group(0) @binding(3) var<storage, read> instances: array<Instance>;
+@group(0) @binding(4) var<storage, read> sum_partial: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> history: array<f32>;
+@group(0) @binding(6) var<storage, read> times: array<vec2<u32>>;   // sample, then snapshot times (ticks)
+@group(0) @binding(7) var<storage, read_write> indirect: array<u32>;
+
+var<workgroup> sh_u: u32;
+var<workgroup> sh_dt: array<f32, RG>;
+var<workgroup> sh_ix: array<u32, RG>;
+var<workgroup> sh_sum: array<vec4<f32>, RG>;
+var<workgroup> sh_res: array<vec4<f32>, MAX_INSTANCES>;
+
+fn fail(code: u32, index: u32, value: f32) {
+    ctrl.state = STATE_FAILED;
+    ctrl.fail_code = code;
+    ctrl.fail_index = index;
+    ctrl.fail_value = value;
+}
+
+// t_n + TIME_SLACK dt^{n-1/2} >= T (step::Clock's rule), in ticks.
+fn due(when: vec2<u32>) -> bool {
+    let slack = to_ticks(0.01 * ctrl.dt_prev, params.ticks_per_second);
+    return ge64(add64(vec2<u32>(ctrl.t_lo, ctrl.t_hi), slack), when);
+}
+
+fn better(d0: f32, i0: u32, d1: f32, i1: u32) -> bool {
+    return d1 < d0 || (d1 == d0 && i1 < i0);
+}
+
+@compute @workgroup_size(RG)
+fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
+    let l = lid.x;
+    if (l == 0u) {
+        sh_u = ctrl.state;
+    }
+    let state = workgroupUniformLoad(&sh_u);
+    if (state != STATE_RUNNING) {
+        return;
+    }
+    var d = 3.0e38;
+    var ix = NONE;
+    if (l < params.dt_groups) {
+        let p = dt_partial[l];
+        d = bitcast<f32>(p.x);
+        ix = p.y;
+    }
+    sh_dt[l] = d;
+    sh_ix[l] = ix;
+    workgroupBarrier();
+    for (var s = RG / 2u; s > 0u; s >>= 1u) {
+        if (l < s) {
+            if (better(sh_dt[l], sh_ix[l], sh_dt[l + s], sh_ix[l + s])) {
+                sh_dt[l] = sh_dt[l + s];
+                sh_ix[l] = sh_ix[l + s];
+            }
+        }
+        workgroupBarrier();
+    }
+    if (l != 0u) {
+        return;
+    }
+    let bad = atomicLoad(&ctrl.bad_element);
+    if (bad != NONE) {
+        fail(1u, bad, 0.0);
+        return;
+    }
+    let dt_min = sh_dt[0];
+    let at = sh_ix[0];
+    if (not_finite(dt_min) || !(dt_min > 0.0)) {
+        fail(5u, at, dt_min);
+        return;
+    }
+    var dt_next = params.scale * dt_min;
+    if (params.fixed_dt > 0.0) {
+        if (params.fixed_dt > dt_min) {
+            fail(3u, at, dt_min);
+            return;
+        }
+        dt_next = params.fixed_dt;
+    }
+    if (ctrl.step == 0u) {
+        ctrl.dt_first = dt_next;
+    } else if (dt_next < 1e-6 * ctrl.dt_first) {
+        fail(4u, at, dt_next);
+        return;
+    }
+    // The last step ends exactly at end_time.
+    let t = vec2<u32>(ctrl.t_lo, ctrl.t_hi);
+    let end = vec2<u32>(params.end_lo, params.end_hi);
+    if (!ge64(t, end)) {
+        let lo = end.x - t.x;
+        let hi = end.y - t.y - select(0u, 1u, end.x < t.x);
+        let remaining = (f32(hi) * 4294967296.0 + f32(lo)) / params.ticks_per_second;
+        if (remaining > dt_next) {
+            ctrl.dt_min = min(ctrl.dt_min, dt_next);
+            ctrl.dt_max = max(ctrl.dt_max, dt_next);
+        } else {
+            dt_next = remaining;
+        }
+    }
+    if (ctrl.step == 0u) {
+        ctrl.dt_node = 0.5 * dt_next;
+    } else {
+        ctrl.dt_node = 0.5 * (ctrl.dt_prev + dt_next);
+    }
+    ctrl.dt_next = dt_next;
+    ctrl.dt_elem = at;
+}
+
+@compute @workgroup_size(RG)
+fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
+    let l = lid.x;
+    if (l == 0u) {
+        sh_u = ctrl.state;
+    }
+    let state = workgroupUniformLoad(&sh_u);
+    if (state != STATE_RUNNING) {
+        return;
+    }
+    if (l == 0u) {
+        sh_u = ctrl.flags;
+    }
+    let flags = workgroupUniformLoad(&sh_u);
+    if ((flags & FLAG_SAMPLE) != 0u) {
+        for (var r = 0u; r < params.n_instances; r++) {
+            let inst = instances[r];
+            var acc = vec4<f32>(0.0);
+            if (l < inst.groups) {
+                acc = sum_partial[inst.first_group + l];
+            }
+            sh_sum[l] = acc;
+            workgroupBarrier();
+            for (var s = RG / 2u; s > 0u; s >>= 1u) {
+                if (l < s) {
+                    sh_sum[l] += sh_sum[l + s];
+                }
+                workgroupBarrier();
+            }
+            if (l == 0u) {
+                sh_res[r] = sh_sum[0];
+            }
+            workgroupBarrier();
+        }
+    }
+    if (l != 0u) {
+        return;
+    }
+    let bad = atomicLoad(&ctrl.bad_node);
+    if (bad != NONE) {
+        fail(2u, bad, 0.0);
+        return;
+    }
+    let nb = params.n_bodies;
+    if ((flags & FLAG_SAMPLE) != 0u) {
+        let base = (ctrl.rows % params.row_capacity) * params.row_stride;
+        var ke = 0.0;
+        for (var b = 0u; b < nb; b++) {
+            ke += sh_res[b].x;
+            let v = sh_res[b].yz * instances[b].scale;
+            history[base + 9u + 2u * b] = v.x;
+            history[base + 10u + 2u * b] = v.y;
+        }
+        let el = sh_res[nb];
+        var ext = 0.0;
+        if (params.n_cons > 0u) {
+            // Accumulated reaction work minus half of this step's (shared with the next interval).
+            ext = sh_res[nb + 1u].x - 0.5 * sh_res[nb + 1u].y;
+        }
+        history[base + 0u] = bitcast<f32>(ctrl.t_lo);
+        history[base + 1u] = bitcast<f32>(ctrl.t_hi);
+        history[base + 2u] = bitcast<f32>(ctrl.step);
+        history[base + 3u] = ctrl.dt_next;
+        history[base + 4u] = ke;
+        history[base + 5u] = el.x;
+        history[base + 6u] = el.y + el.z;
+        history[base + 7u] = el.w;
+        history[base + 8u] = ext;
+        ctrl.rows += 1u;
+        while (ctrl.next_sample < params.n_sample_times && due(times[ctrl.next_sample])) {
+            ctrl.next_sample += 1u;
+        }
+    }
+    if ((flags & FLAG_SNAPSHOT) != 0u) {
+        ctrl.state = STATE_PAUSED;
+        while (ctrl.next_snapshot < params.n_snapshot_times
+            && due(times[params.n_sample_times + ctrl.next_snapshot])) {
+            ctrl.next_snapshot += 1u;
+        }
+    }
+    if ((flags & FLAG_END) != 0u) {
+        ctrl.state = STATE_DONE;
+        return;
+    }
+    // t_{n+1} = t_n + dt^{n+1/2}, in ticks.
+    let dt = ctrl.dt_next;
+    let t = add64(vec2<u32>(ctrl.t_lo, ctrl.t_hi), to_ticks(dt, params.ticks_per_second));
+    ctrl.t_lo = t.x;
+    ctrl.t_hi = t.y;
+    ctrl.dt_prev = dt;
+    ctrl.step += 1u;
+    // Flags of the next step.
+    let at_end = due(vec2<u32>(params.end_lo, params.end_hi));
+    var nf = 0u;
+    if (at_end) {
+        nf |= FLAG_END | FLAG_SAMPLE;
+        if (params.n_snapshot_times > 0u) {
+            nf |= FLAG_SNAPSHOT;
+        }
+    }
+    if (ctrl.next_sample < params.n_sample_times && due(times[ctrl.next_sample])) {
+        nf |= FLAG_SAMPLE;
+    }
+    if (ctrl.next_snapshot < params.n_snapshot_times
+        && due(times[params.n_sample_times + ctrl.next_snapshot])) {
+        nf |= FLAG_SNAPSHOT;
+    }
+    ctrl.flags = nf;
+    let on = (nf & FLAG_SAMPLE) != 0u;
+    indirect[0] = select(0u, params.sum_groups, on);
+    indirect[1] = 1u;
+    indirect[2] = 1u;
+}

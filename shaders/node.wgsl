@@ -1,0 +1,62 @@
+// Node stage: gathers each node's force from its elements' slots in a fixed order (no atomics,
+// deterministic), then the central-difference update v^{n+1/2} = v^{n-1/2} + dt_n f / m and
+// u_{n+1} = u_n + dt^{n+1/2} v^{n+1/2}; on sample steps also the node's kinetic energy
+// 1/2 m v^{n-1/2} . v^{n+1/2} and momentum. Mirrors CpuSolver::step (stages 3 to 5).
+
+override WG: u32 = 64u;
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read_write> nodes: array<vec4<f32>>;   // (u, v)
+@group(0) @binding(2) var<storage, read> inv_mass: array<f32>;
+@group(0) @binding(3) var<storage, read> adj_offsets: array<u32>;     // n_nodes + 1
+@group(0) @binding(4) var<storage, read> adj_slots: array<u32>;       // 4 e + corner
+@group(0) @binding(5) var<storage, read> elem_force: array<vec2<f32>>;
+@group(0) @binding(6) var<storage, read_write> v_prev: array<vec2<f32>>;
+@group(0) @binding(7) var<storage, read_write> ctrl: Control;
+@group(0) @binding(8) var<storage, read_write> sample_src: array<vec4<f32>>;
+//#if fields
+@group(0) @binding(9) var<storage, read_write> u_snap: array<vec2<f32>>;
+//#endif
+
+@compute @workgroup_size(WG)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= params.n_nodes) {
+        return;
+    }
+    if (ctrl.state != STATE_RUNNING) {
+        return;
+    }
+    var f = vec2<f32>(0.0);
+    let end = adj_offsets[i + 1u];
+    for (var k = adj_offsets[i]; k < end; k++) {
+        f += elem_force[adj_slots[k]];
+    }
+    let s = nodes[i];
+    let vm = s.zw;
+    let vp = vm + (ctrl.dt_node * inv_mass[i]) * f;
+    if (not_finite(vp.x) || not_finite(vp.y)) {
+        atomicMin(&ctrl.bad_node, i);
+    }
+    let flags = ctrl.flags;
+    if ((flags & (FLAG_SAMPLE | FLAG_SNAPSHOT)) != 0u) {
+        // v^{-1/2} = 2 v_0 - v^{1/2} on the first step.
+        let vq = select(vm, 2.0 * vm - vp, ctrl.step == 0u);
+        v_prev[i] = vq;
+        if ((flags & FLAG_SAMPLE) != 0u) {
+            // Kinetic energy in the conserved form, and momentum at t_n.
+            let m = 1.0 / inv_mass[i];
+            sample_src[i] = vec4<f32>(0.5 * m * dot(vq, vp), 0.5 * m * (vq + vp), 0.0);
+        }
+    }
+//#if fields
+    if ((flags & FLAG_SNAPSHOT) != 0u) {
+        u_snap[i] = s.xy;
+    }
+//#endif
+    var u = s.xy;
+    if ((flags & FLAG_END) == 0u) {
+        u += ctrl.dt_next * vp;
+    }
+    nodes[i] = vec4<f32>(u, vp);
+}

@@ -1,0 +1,83 @@
+//! The compiled kernels of a scene (stateless; built once from the device and the plan's
+//! features), kept apart from the simulation buffers in [`super::state::GpuState`].
+
+use std::borrow::Cow;
+
+pub use super::shader::Features;
+use super::{boundary, control, element, node, reduce, shader};
+
+/// Compute pipelines for one combination of features.
+#[derive(Debug)]
+pub struct Kernels {
+    /// Features compiled in.
+    pub features: Features,
+    /// Element stage.
+    pub element: wgpu::ComputePipeline,
+    /// First level of the stable-step minimum.
+    pub min_dt: wgpu::ComputePipeline,
+    /// Second level and step control.
+    pub control_dt: wgpu::ComputePipeline,
+    /// Node stage.
+    pub node: wgpu::ComputePipeline,
+    /// Velocity boundaries (only for scenes that have them).
+    pub boundary: Option<wgpu::ComputePipeline>,
+    /// First level of the sample sums.
+    pub sum: wgpu::ComputePipeline,
+    /// Second level of the sums, history row, time and flags.
+    pub control_end: wgpu::ComputePipeline,
+}
+
+impl Kernels {
+    /// Compiles the kernels a scene needs.
+    pub fn new(device: &wgpu::Device, features: Features, boundaries: bool) -> Self {
+        Self {
+            features,
+            element: element::pipeline(device, features),
+            min_dt: reduce::min_pipeline(device, features),
+            control_dt: control::dt_pipeline(device, features),
+            node: node::pipeline(device, features),
+            boundary: boundaries.then(|| boundary::pipeline(device, features)),
+            sum: reduce::sum_pipeline(device, features),
+            control_end: control::end_pipeline(device, features),
+        }
+    }
+
+    /// Every kernel source with its name, for validation.
+    pub fn sources() -> [(&'static str, &'static str); 5] {
+        [
+            ("element", element::SOURCE),
+            ("node", node::SOURCE),
+            ("boundary", boundary::SOURCE),
+            ("reduce", reduce::SOURCE),
+            ("control", control::SOURCE),
+        ]
+    }
+}
+
+pub(crate) fn compute_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    kernel: &str,
+    features: Features,
+    entry: &str,
+    workgroup: Option<u32>,
+) -> wgpu::ComputePipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(Cow::Owned(shader::source(kernel, features))),
+    });
+    let constants: Vec<(&str, f64)> = workgroup
+        .map(|w| vec![("WG", w as f64)])
+        .unwrap_or_default();
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: None,
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
+}

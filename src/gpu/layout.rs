@@ -1,0 +1,154 @@
+//! `#[repr(C)]` mirrors of the structs in `shaders/common.wgsl` and of the per-kernel structs,
+//! with their sizes asserted against the WGSL layout. Field meanings are documented once, in the
+//! WGSL declarations.
+#![allow(missing_docs)]
+
+use bytemuck::{Pod, Zeroable};
+
+/// Mirror of WGSL `Params` (uniform): sizes and static run parameters.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+pub struct Params {
+    pub n_nodes: u32,
+    pub n_elems: u32,
+    pub n_cons: u32,
+    pub n_bodies: u32,
+    pub scale: f32,
+    pub fixed_dt: f32,
+    pub end_lo: u32,
+    pub end_hi: u32,
+    pub n_sample_times: u32,
+    pub n_snapshot_times: u32,
+    pub row_stride: u32,
+    pub row_capacity: u32,
+    pub dt_groups: u32,
+    pub n_instances: u32,
+    pub sum_groups: u32,
+    pub ticks_per_second: f32,
+}
+
+/// Mirror of WGSL `Control`: the run state advanced on the GPU.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+pub struct Control {
+    pub t_lo: u32,
+    pub t_hi: u32,
+    pub dt_prev: f32,
+    pub dt_next: f32,
+    pub dt_node: f32,
+    pub dt_first: f32,
+    pub dt_min: f32,
+    pub dt_max: f32,
+    pub step: u32,
+    pub flags: u32,
+    pub state: u32,
+    pub rows: u32,
+    pub next_sample: u32,
+    pub next_snapshot: u32,
+    pub fail_code: u32,
+    pub fail_index: u32,
+    pub fail_value: f32,
+    pub dt_elem: u32,
+    pub bad_element: u32,
+    pub bad_node: u32,
+}
+
+/// Byte offset of `Control::state`, for un-pausing with a 4-byte write.
+pub const CONTROL_STATE_OFFSET: u64 = 40;
+
+/// Mirror of WGSL `Instance`: one range summed on sample steps.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+pub struct Instance {
+    pub start: u32,
+    pub count: u32,
+    pub groups: u32,
+    pub first_group: u32,
+    pub scale: f32,
+    pub _pad: [u32; 3],
+}
+
+/// Mirror of WGSL `Body` (element.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuBody {
+    pub model: u32,
+    pub formulation: u32,
+    pub hourglass: u32,
+    pub _pad0: u32,
+    pub density: f32,
+    pub thickness: f32,
+    pub lambda: f32,
+    pub mu: f32,
+    pub lambda_plane: f32,
+    pub wave_modulus: f32,
+    pub hourglass_coefficient: f32,
+    pub bulk_linear: f32,
+    pub bulk_quadratic: f32,
+    pub mass: f32,
+    pub _pad1: [f32; 2],
+}
+
+/// Mirror of WGSL `Element` (element.wgsl): corners relative to the centre, nodes, body.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuElement {
+    pub c01: [f32; 4],
+    pub c23: [f32; 4],
+    pub nodes: [u32; 4],
+    pub body: u32,
+    pub _pad: [u32; 3],
+}
+
+/// Mirror of WGSL `Constraint` (boundary.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuConstraint {
+    pub node: u32,
+    pub mask: u32,
+    pub vx: f32,
+    pub vy: f32,
+    pub mass: f32,
+    pub _pad: [f32; 3],
+}
+
+/// Control flags (WGSL `FLAG_*`).
+pub const FLAG_SAMPLE: u32 = 1;
+/// Snapshot due this step.
+pub const FLAG_SNAPSHOT: u32 = 2;
+/// Last step.
+pub const FLAG_END: u32 = 4;
+/// Control states (WGSL `STATE_*`).
+pub const STATE_RUNNING: u32 = 0;
+/// Paused after a snapshot step until the host has read it.
+pub const STATE_PAUSED: u32 = 1;
+/// End reached.
+pub const STATE_DONE: u32 = 2;
+/// Unstable.
+pub const STATE_FAILED: u32 = 3;
+/// "No index" marker.
+pub const NONE: u32 = u32::MAX;
+/// Most sum instances (bodies + 2) control.wgsl can hold.
+pub const MAX_INSTANCES: usize = 72;
+
+const _: () = assert!(std::mem::size_of::<Params>() == 64);
+const _: () = assert!(std::mem::size_of::<Control>() == 80);
+const _: () = assert!(std::mem::size_of::<Instance>() == 32);
+const _: () = assert!(std::mem::size_of::<GpuBody>() == 64);
+const _: () = assert!(std::mem::size_of::<GpuElement>() == 64);
+const _: () = assert!(std::mem::size_of::<GpuConstraint>() == 32);
+const _: () = assert!(std::mem::offset_of!(Control, state) as u64 == CONTROL_STATE_OFFSET);
+
+/// Ticks per end time: the GPU keeps time as a 64-bit count of `end_time / 2^40`.
+pub const TICKS_PER_END: f64 = (1u64 << 40) as f64;
+
+/// A time in ticks as (lo, hi).
+pub fn ticks(t: f64, end_time: f64) -> [u32; 2] {
+    let n = (t / end_time * TICKS_PER_END).round().max(0.0) as u64;
+    [n as u32, (n >> 32) as u32]
+}
+
+/// Seconds of a tick count (lo, hi).
+pub fn seconds(lo: u32, hi: u32, end_time: f64) -> f64 {
+    ((hi as u64) << 32 | lo as u64) as f64 * end_time / TICKS_PER_END
+}

@@ -1,0 +1,525 @@
+//! The GPU solver: records batches of steps per submission and reads back only the control block
+//! and the history rows the GPU wrote, plus the nodal state at snapshot times.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use crate::error::{Error, Result};
+use crate::model::Model;
+use crate::plan::{Plan, Stage};
+use crate::step::cpu::CpuSolver;
+use crate::step::{Counters, Event, Failure, Sample, Schedule, Snapshot, Solver};
+
+use super::context::GpuContext;
+use super::kernels::{Features, Kernels};
+use super::layout::*;
+use super::state::{GpuState, ROW_CAPACITY};
+
+/// One 2-vector per node.
+pub type NodalField = Vec<[f64; 2]>;
+
+/// Fewest steps recorded per submission.
+pub const MIN_BATCH: u32 = 32;
+/// Most steps recorded per submission.
+pub const MAX_BATCH: u32 = 1024;
+
+/// Explicit central-difference integration on the GPU (f32).
+#[derive(Debug)]
+pub struct GpuSolver {
+    ctx: Arc<GpuContext>,
+    kernels: Kernels,
+    state: GpuState,
+    schedule: Schedule,
+    names: Names,
+    readback: wgpu::Buffer,
+    snap_readback: Option<wgpu::Buffer>,
+    ctrl: Control,
+    rows_read: u32,
+    dt_estimate: f64,
+    counters: Counters,
+    finished: bool,
+}
+
+/// What failure messages need of the model.
+#[derive(Debug, Clone)]
+struct Names {
+    bodies: Vec<(String, std::ops::Range<usize>, std::ops::Range<usize>)>,
+    nodes: usize,
+}
+
+impl Names {
+    fn element(&self, e: usize) -> String {
+        match self.bodies.iter().find(|b| b.2.contains(&e)) {
+            Some(b) => format!(
+                "element {e} (body {:?}, local element {})",
+                b.0,
+                e - b.2.start
+            ),
+            None => format!("element {e}"),
+        }
+    }
+
+    fn node(&self, i: usize) -> String {
+        match self.bodies.iter().find(|b| b.1.contains(&i)) {
+            Some(b) => format!("node {i} (body {:?}, local node {})", b.0, i - b.1.start),
+            None => format!("node {i}"),
+        }
+    }
+}
+
+impl GpuSolver {
+    /// Uploads `model` to the device of `ctx` and compiles the kernels its plan needs.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the model does not fit.
+    pub fn new(
+        ctx: Arc<GpuContext>,
+        model: &Model,
+        plan: &Plan,
+        schedule: Schedule,
+    ) -> Result<Self> {
+        let features = Features {
+            dissipation: plan.has_dissipation(),
+            fields: plan.has(Stage::Fields),
+            reduce_group: if ctx.info.device_type == wgpu::DeviceType::Cpu {
+                64
+            } else {
+                256
+            },
+        };
+        let device = &ctx.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let kernels = Kernels::new(device, features, plan.has(Stage::VelocityBoundaries));
+        let state = GpuState::new(device, &kernels, model, plan, &schedule);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu(format!(
+                "kernel or buffer setup rejected by {}: {e}",
+                ctx.adapter_name()
+            )));
+        }
+        let state = state?;
+        let history_bytes = 4 * (ROW_CAPACITY * state.params.row_stride) as u64;
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: 256 + history_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let nn = model.node_count() as u64;
+        let snap_readback = features.fields.then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("snapshot_readback"),
+                size: 8 * nn + 8 * nn + 16 * nn,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        // First estimate of the step, for batch sizes only.
+        let cpu = CpuSolver::new(model.clone(), plan.clone(), schedule);
+        let dt_estimate = schedule
+            .time_step
+            .unwrap_or(schedule.time_step_scale * cpu.stable_step().0);
+        let names = Names {
+            bodies: model
+                .bodies
+                .iter()
+                .map(|b| (b.name.clone(), b.nodes.clone(), b.elements.clone()))
+                .collect(),
+            nodes: model.node_count(),
+        };
+        Ok(Self {
+            ctx,
+            kernels,
+            state,
+            schedule,
+            names,
+            readback,
+            snap_readback,
+            ctrl: Control::default(),
+            rows_read: 0,
+            dt_estimate,
+            counters: Counters::default(),
+            finished: false,
+        })
+    }
+
+    /// The device-side state (buffers allocated for this scene).
+    pub fn state(&self) -> &GpuState {
+        &self.state
+    }
+
+    /// The compiled kernels.
+    pub fn kernels(&self) -> &Kernels {
+        &self.kernels
+    }
+
+    /// The context.
+    pub fn context(&self) -> &Arc<GpuContext> {
+        &self.ctx
+    }
+
+    fn time_of(&self, c: &Control) -> f64 {
+        seconds(c.t_lo, c.t_hi, self.schedule.end_time)
+    }
+
+    /// Steps to record in the next submission: up to the next sample, snapshot or end.
+    fn batch(&self) -> u32 {
+        let t = self.time_of(&self.ctrl);
+        let s = &self.schedule;
+        let mut next = s.end_time;
+        let k = (t / s.history_interval).floor() + 1.0;
+        next = next.min(k * s.history_interval);
+        if let Some(fi) = s.field_interval {
+            next = next.min(((t / fi).floor() + 1.0) * fi);
+        }
+        let steps = ((next - t) / self.dt_estimate).ceil() + 2.0;
+        (steps.max(0.0) as u32).clamp(MIN_BATCH, MAX_BATCH)
+    }
+
+    /// Records `steps` steps in one submission, with a copy of the control block and history
+    /// into the readback buffer at the end.
+    pub fn submit(&mut self, steps: u32) {
+        let device = &self.ctx.device;
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("steps"),
+        });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("steps"),
+                timestamp_writes: None,
+            });
+            for _ in 0..steps {
+                self.state.record_step(&self.kernels, &mut pass);
+            }
+        }
+        enc.copy_buffer_to_buffer(
+            &self.state.ctrl,
+            0,
+            &self.readback,
+            0,
+            std::mem::size_of::<Control>() as u64,
+        );
+        enc.copy_buffer_to_buffer(
+            &self.state.history,
+            0,
+            &self.readback,
+            256,
+            self.state.history.size(),
+        );
+        self.ctx.queue.submit([enc.finish()]);
+        self.counters.submissions += 1;
+    }
+
+    fn map_read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+        let slice = buffer.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        self.ctx
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("device lost while waiting: {e}")))?;
+        let bytes = slice
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(format!("cannot map readback buffer: {e:?}")))?
+            .to_vec();
+        buffer.unmap();
+        Ok(bytes)
+    }
+
+    /// Reads back the control block and the new history rows.
+    fn read(&mut self, events: &mut Vec<Event>) -> Result<()> {
+        let bytes = self.map_read(&self.readback)?;
+        self.counters.readbacks += 1;
+        let ctrl: Control = bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<Control>()]);
+        let hist: &[u8] = &bytes[256..];
+        let stride = self.state.params.row_stride as usize;
+        let nb = self.names.bodies.len();
+        let mut row_events = Vec::new();
+        while self.rows_read < ctrl.rows {
+            let base = (self.rows_read % ROW_CAPACITY) as usize * stride;
+            let w = |i: usize| -> f32 {
+                bytemuck::pod_read_unaligned(&hist[4 * (base + i)..4 * (base + i) + 4])
+            };
+            let sample = Sample {
+                time: seconds(w(0).to_bits(), w(1).to_bits(), self.schedule.end_time),
+                step: w(2).to_bits() as u64,
+                dt: w(3) as f64,
+                kinetic: w(4) as f64,
+                internal: w(5) as f64,
+                hourglass: w(6) as f64,
+                viscous: w(7) as f64,
+                external: w(8) as f64,
+                body_velocity: (0..nb)
+                    .map(|b| [w(9 + 2 * b) as f64, w(10 + 2 * b) as f64])
+                    .collect(),
+            };
+            row_events.push(Event::Sample(sample));
+            self.rows_read += 1;
+        }
+        if ctrl.dt_next > 0.0 {
+            self.dt_estimate = ctrl.dt_next as f64;
+        }
+        self.ctrl = ctrl;
+        let snapshot_done = ctrl.state == STATE_DONE && ctrl.flags & FLAG_SNAPSHOT != 0;
+        if ctrl.state == STATE_PAUSED || snapshot_done {
+            let (step, time) = if ctrl.state == STATE_PAUSED {
+                (
+                    ctrl.step as u64 - 1,
+                    self.time_of(&ctrl) - ctrl.dt_prev as f64,
+                )
+            } else {
+                (ctrl.step as u64, self.time_of(&ctrl))
+            };
+            let snap = self.read_snapshot(step, time)?;
+            row_events.push(Event::Snapshot(snap));
+            if ctrl.state == STATE_PAUSED {
+                self.ctx.queue.write_buffer(
+                    &self.state.ctrl,
+                    CONTROL_STATE_OFFSET,
+                    bytemuck::bytes_of(&STATE_RUNNING),
+                );
+            }
+        }
+        events.extend(row_events);
+        match ctrl.state {
+            STATE_DONE => {
+                self.finished = true;
+                events.push(Event::Done);
+            }
+            STATE_FAILED => {
+                self.finished = true;
+                let i = ctrl.fail_index as usize;
+                let message = match ctrl.fail_code {
+                    1 => format!(
+                        "{} inverted: a corner Jacobian is not positive; reduce time_step_scale, \
+                         refine the mesh or raise the hourglass coefficient",
+                        self.names.element(i)
+                    ),
+                    2 => format!(
+                        "velocity of {} is not finite: the run went unstable",
+                        if i < self.names.nodes { self.names.node(i) } else { format!("node {i}") }
+                    ),
+                    3 => format!(
+                        "the fixed time_step {:e} exceeds the stable step {:e} of {}",
+                        self.schedule.time_step.unwrap_or(0.0),
+                        ctrl.fail_value,
+                        self.names.element(i)
+                    ),
+                    4 => format!(
+                        "the stable step collapsed to {:e} (first step {:e}) at {}",
+                        ctrl.fail_value,
+                        ctrl.dt_first,
+                        self.names.element(i)
+                    ),
+                    _ => format!(
+                        "stable step is {:e} at {}: the element is degenerate or its state is not finite",
+                        ctrl.fail_value,
+                        self.names.element(i)
+                    ),
+                };
+                events.push(Event::Failed(Failure {
+                    step: ctrl.step as u64,
+                    time: self.time_of(&ctrl),
+                    message,
+                }));
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn read_snapshot(&mut self, step: u64, time: f64) -> Result<Snapshot> {
+        let (Some(rb), Some(u_snap)) = (&self.snap_readback, &self.state.u_snap) else {
+            return Err(Error::Gpu(
+                "snapshot requested without field buffers".into(),
+            ));
+        };
+        let nn = self.names.nodes as u64;
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("snapshot"),
+            });
+        enc.copy_buffer_to_buffer(u_snap, 0, rb, 0, 8 * nn);
+        enc.copy_buffer_to_buffer(&self.state.v_prev, 0, rb, 8 * nn, 8 * nn);
+        enc.copy_buffer_to_buffer(&self.state.nodes, 0, rb, 16 * nn, 16 * nn);
+        self.ctx.queue.submit([enc.finish()]);
+        let bytes = self.map_read(rb)?;
+        self.counters.readbacks += 1;
+        let f: &[f32] = bytemuck::cast_slice(&bytes);
+        let n = nn as usize;
+        let displacement = (0..n)
+            .map(|i| [f[2 * i] as f64, f[2 * i + 1] as f64])
+            .collect();
+        let velocity = (0..n)
+            .map(|i| {
+                let vp = [f[2 * n + 2 * i], f[2 * n + 2 * i + 1]];
+                let v = [f[4 * n + 4 * i + 2], f[4 * n + 4 * i + 3]];
+                [0.5 * (vp[0] + v[0]) as f64, 0.5 * (vp[1] + v[1]) as f64]
+            })
+            .collect();
+        Ok(Snapshot {
+            time,
+            step,
+            displacement,
+            velocity,
+        })
+    }
+
+    /// Reads the current nodal displacements and half-step velocities (one extra readback).
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the device is lost.
+    pub fn nodes(&mut self) -> Result<(NodalField, NodalField)> {
+        let nn = self.names.nodes as u64;
+        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("nodes_readback"),
+            size: 16 * nn.max(1),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("nodes"),
+            });
+        enc.copy_buffer_to_buffer(&self.state.nodes, 0, &staging, 0, 16 * nn);
+        self.ctx.queue.submit([enc.finish()]);
+        let bytes = self.map_read(&staging)?;
+        self.counters.readbacks += 1;
+        let f: &[f32] = bytemuck::cast_slice(&bytes);
+        let n = nn as usize;
+        Ok((
+            (0..n)
+                .map(|i| [f[4 * i] as f64, f[4 * i + 1] as f64])
+                .collect(),
+            (0..n)
+                .map(|i| [f[4 * i + 2] as f64, f[4 * i + 3] as f64])
+                .collect(),
+        ))
+    }
+
+    /// Kernel test hook: uploads displacements `u` and half-step velocities `v`, runs the element
+    /// stage once, and returns each element's nodal forces and stable step.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the device is lost.
+    #[allow(clippy::type_complexity)]
+    pub fn element_stage(
+        &mut self,
+        u: &[[f64; 2]],
+        v: &[[f64; 2]],
+    ) -> Result<(Vec<[[f64; 2]; 4]>, Vec<f64>)> {
+        let data: Vec<[f32; 4]> = u
+            .iter()
+            .zip(v)
+            .map(|(u, v)| [u[0] as f32, u[1] as f32, v[0] as f32, v[1] as f32])
+            .collect();
+        self.ctx
+            .queue
+            .write_buffer(&self.state.nodes, 0, bytemuck::cast_slice(&data));
+        let ne = self.state.params.n_elems as u64;
+        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("element_readback"),
+            size: 36 * ne.max(1),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("element"),
+            });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("element"),
+                timestamp_writes: None,
+            });
+            self.state.record_element(&self.kernels, &mut pass);
+        }
+        enc.copy_buffer_to_buffer(&self.state.elem_force, 0, &staging, 0, 32 * ne);
+        enc.copy_buffer_to_buffer(&self.state.elem_dt, 0, &staging, 32 * ne, 4 * ne);
+        self.ctx.queue.submit([enc.finish()]);
+        let bytes = self.map_read(&staging)?;
+        let f: &[f32] = bytemuck::cast_slice(&bytes);
+        let n = ne as usize;
+        let forces = (0..n)
+            .map(|e| {
+                std::array::from_fn(|a| [f[8 * e + 2 * a] as f64, f[8 * e + 2 * a + 1] as f64])
+            })
+            .collect();
+        let dt = (0..n).map(|e| f[8 * n + e] as f64).collect();
+        Ok((forces, dt))
+    }
+
+    /// Runs `steps` steps of one stage alone (`"element"`, `"node"`, `"control"`) or whole steps
+    /// (`"step"`) and returns the wall seconds, for the bench's per-stage shares.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the device is lost.
+    pub fn time_stage(&mut self, stage: &str, steps: u32) -> Result<f64> {
+        let t0 = Instant::now();
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(stage) });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(stage),
+                timestamp_writes: None,
+            });
+            for _ in 0..steps {
+                match stage {
+                    "element" => self.state.record_element(&self.kernels, &mut pass),
+                    "node" => self.state.record_node(&self.kernels, &mut pass),
+                    "control" => self.state.record_control(&self.kernels, &mut pass),
+                    _ => self.state.record_step(&self.kernels, &mut pass),
+                }
+            }
+        }
+        self.ctx.queue.submit([enc.finish()]);
+        self.ctx
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("device lost while waiting: {e}")))?;
+        Ok(t0.elapsed().as_secs_f64())
+    }
+}
+
+impl Solver for GpuSolver {
+    fn advance(&mut self, events: &mut Vec<Event>) -> Result<()> {
+        let start = events.len();
+        while !self.finished && events.len() == start {
+            let steps = self.batch();
+            self.submit(steps);
+            self.read(events)?;
+        }
+        Ok(())
+    }
+
+    fn steps(&self) -> u64 {
+        self.ctrl.step as u64
+    }
+
+    fn time(&self) -> f64 {
+        self.time_of(&self.ctrl)
+    }
+
+    fn dt_range(&self) -> (f64, f64) {
+        (self.ctrl.dt_min as f64, self.ctrl.dt_max as f64)
+    }
+
+    fn backend(&self) -> &'static str {
+        "gpu"
+    }
+
+    fn adapter(&self) -> String {
+        self.ctx.adapter_name()
+    }
+
+    fn counters(&self) -> Counters {
+        self.counters
+    }
+}

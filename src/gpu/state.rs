@@ -1,0 +1,507 @@
+//! Device-resident simulation state: the buffers a scene needs (and no others) and the bind groups,
+//! built once; [`GpuState::record_step`] records one step as labelled dispatches.
+
+use wgpu::util::DeviceExt;
+
+use crate::error::{Error, Result};
+use crate::model::Model;
+use crate::plan::{Plan, Stage};
+use crate::scene::{Formulation, HourglassForm, MaterialModel};
+use crate::step::Schedule;
+
+use super::kernels::Kernels;
+use super::layout::*;
+use super::{boundary, element, node, reduce};
+
+/// Rows the history ring holds between readbacks.
+pub const ROW_CAPACITY: u32 = 4096;
+
+/// Buffers and bind groups of one scene on the device.
+#[derive(Debug)]
+pub struct GpuState {
+    /// Sizes and static parameters (as uploaded).
+    pub params: Params,
+    /// Names and sizes (bytes) of the buffers allocated, for the plan report.
+    pub allocated: Vec<(&'static str, u64)>,
+    pub(crate) ctrl: wgpu::Buffer,
+    pub(crate) nodes: wgpu::Buffer,
+    pub(crate) elem_force: wgpu::Buffer,
+    pub(crate) elem_dt: wgpu::Buffer,
+    pub(crate) v_prev: wgpu::Buffer,
+    pub(crate) u_snap: Option<wgpu::Buffer>,
+    pub(crate) history: wgpu::Buffer,
+    pub(crate) indirect: wgpu::Buffer,
+    groups: Groups,
+    bind: Binds,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Groups {
+    element: u32,
+    node: u32,
+    boundary: u32,
+}
+
+#[derive(Debug)]
+struct Binds {
+    element: wgpu::BindGroup,
+    min_dt: wgpu::BindGroup,
+    control_dt: wgpu::BindGroup,
+    node: wgpu::BindGroup,
+    boundary: Option<wgpu::BindGroup>,
+    sum: wgpu::BindGroup,
+    control_end: wgpu::BindGroup,
+}
+
+struct Alloc<'a> {
+    device: &'a wgpu::Device,
+    list: Vec<(&'static str, u64)>,
+}
+
+impl Alloc<'_> {
+    fn init(&mut self, name: &'static str, data: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        // Storage bindings may not be empty.
+        let pad = [0u8; 16];
+        let contents = if data.is_empty() { &pad[..] } else { data };
+        self.list.push((name, contents.len() as u64));
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(name),
+                contents,
+                usage,
+            })
+    }
+
+    fn zeroed(&mut self, name: &'static str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        let size = size.max(16);
+        self.list.push((name, size));
+        self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(name),
+            size,
+            usage,
+            mapped_at_creation: false,
+        })
+    }
+}
+
+fn entries<'a>(list: &[(u32, &'a wgpu::Buffer)]) -> Vec<wgpu::BindGroupEntry<'a>> {
+    list.iter()
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect()
+}
+
+fn bind(
+    device: &wgpu::Device,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    list: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries(list),
+    })
+}
+
+/// Sample or snapshot times k * interval, k = 0.. up to past `end`, in ticks.
+fn time_table(interval: f64, end: f64) -> Vec<[u32; 2]> {
+    let count = ((end / interval).floor() as usize + 2).min(1 << 22);
+    (0..count)
+        .map(|k| ticks(k as f64 * interval, end))
+        .collect()
+}
+
+impl GpuState {
+    /// Uploads a model at t = 0.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the model exceeds what one dispatch can cover or has too many bodies.
+    pub fn new(
+        device: &wgpu::Device,
+        kernels: &Kernels,
+        model: &Model,
+        plan: &Plan,
+        schedule: &Schedule,
+    ) -> Result<GpuState> {
+        let nn = model.node_count();
+        let ne = model.element_count();
+        let nc = model.constraints.len();
+        let nb = model.bodies.len();
+        if nb + 2 > MAX_INSTANCES {
+            return Err(Error::Gpu(format!(
+                "the GPU backend supports at most {} bodies (scene has {nb})",
+                MAX_INSTANCES - 2
+            )));
+        }
+        let max_groups = 65_535usize;
+        if ne.div_ceil(element::WORKGROUP as usize) > max_groups
+            || nn.div_ceil(node::WORKGROUP as usize) > max_groups
+        {
+            return Err(Error::Gpu(format!(
+                "model too large for one dispatch: {ne} elements, {nn} nodes (at most {} each)",
+                max_groups * 64
+            )));
+        }
+        use wgpu::BufferUsages as U;
+        let storage = U::STORAGE;
+        let mut a = Alloc {
+            device,
+            list: Vec::new(),
+        };
+
+        // Static data.
+        let bodies: Vec<GpuBody> = model
+            .bodies
+            .iter()
+            .map(|b| {
+                let p = &b.params;
+                GpuBody {
+                    model: match p.model {
+                        MaterialModel::LinearElastic => 0,
+                        MaterialModel::NeoHookean => 1,
+                    },
+                    formulation: match p.formulation {
+                        Formulation::PlaneStrain => 0,
+                        Formulation::PlaneStress => 1,
+                    },
+                    hourglass: match p.hourglass {
+                        HourglassForm::None => 0,
+                        HourglassForm::Viscous => 1,
+                        HourglassForm::Stiffness => 2,
+                    },
+                    density: p.density as f32,
+                    thickness: p.thickness as f32,
+                    lambda: p.lambda as f32,
+                    mu: p.mu as f32,
+                    lambda_plane: p.lambda_plane as f32,
+                    wave_modulus: p.wave_modulus as f32,
+                    hourglass_coefficient: p.hourglass_coefficient as f32,
+                    bulk_linear: p.bulk_linear as f32,
+                    bulk_quadratic: p.bulk_quadratic as f32,
+                    mass: b.mass as f32,
+                    ..Default::default()
+                }
+            })
+            .collect();
+        let elems: Vec<GpuElement> = (0..ne)
+            .map(|e| {
+                let c = model.corners[e];
+                GpuElement {
+                    c01: [
+                        c[0][0] as f32,
+                        c[0][1] as f32,
+                        c[1][0] as f32,
+                        c[1][1] as f32,
+                    ],
+                    c23: [
+                        c[2][0] as f32,
+                        c[2][1] as f32,
+                        c[3][0] as f32,
+                        c[3][1] as f32,
+                    ],
+                    nodes: model.quads[e],
+                    body: model.element_body[e],
+                    _pad: [0; 3],
+                }
+            })
+            .collect();
+        let node_state: Vec<[f32; 4]> = model
+            .velocity
+            .iter()
+            .map(|v| [0.0, 0.0, v[0] as f32, v[1] as f32])
+            .collect();
+        let inv_mass: Vec<f32> = model.mass.iter().map(|m| (1.0 / m) as f32).collect();
+        let (offsets, slots) = node::adjacency(&model.quads, nn);
+
+        // Sample instances: one per body (its nodes), the elements, the constraints.
+        let rg = kernels.features.reduce_group;
+        let mut instances = Vec::new();
+        let mut first = 0u32;
+        let mut push = |start: usize, count: usize, scale: f32| {
+            let groups = reduce::groups(count, rg);
+            instances.push(Instance {
+                start: start as u32,
+                count: count as u32,
+                groups,
+                first_group: first,
+                scale,
+                _pad: [0; 3],
+            });
+            first += groups;
+        };
+        for b in &model.bodies {
+            push(b.nodes.start, b.nodes.len(), (1.0 / b.mass) as f32);
+        }
+        push(nn, ne, 1.0);
+        if nc > 0 {
+            push(nn + ne, nc, 1.0);
+        }
+        let sum_groups = first;
+
+        let has_fields = plan.has(Stage::Fields);
+        let mut times = time_table(schedule.history_interval, schedule.end_time);
+        let n_sample_times = times.len() as u32;
+        let mut n_snapshot_times = 0;
+        if let (true, Some(fi)) = (has_fields, schedule.field_interval) {
+            let snaps = time_table(fi, schedule.end_time);
+            n_snapshot_times = snaps.len() as u32;
+            times.extend(snaps);
+        }
+        let row_stride = 9 + 2 * nb as u32;
+        let [end_lo, end_hi] = ticks(schedule.end_time, schedule.end_time);
+        let params = Params {
+            n_nodes: nn as u32,
+            n_elems: ne as u32,
+            n_cons: nc as u32,
+            n_bodies: nb as u32,
+            scale: schedule.time_step_scale as f32,
+            fixed_dt: schedule.time_step.unwrap_or(0.0) as f32,
+            end_lo,
+            end_hi,
+            n_sample_times,
+            n_snapshot_times,
+            row_stride,
+            row_capacity: ROW_CAPACITY,
+            dt_groups: reduce::groups(ne, rg),
+            n_instances: instances.len() as u32,
+            sum_groups,
+            ticks_per_second: (TICKS_PER_END / schedule.end_time) as f32,
+        };
+        let control = Control {
+            flags: FLAG_SAMPLE
+                | if n_snapshot_times > 0 {
+                    FLAG_SNAPSHOT
+                } else {
+                    0
+                },
+            state: STATE_RUNNING,
+            dt_min: f32::MAX,
+            bad_element: NONE,
+            bad_node: NONE,
+            ..Default::default()
+        };
+
+        let params_buf = a.init("params", bytemuck::bytes_of(&params), U::UNIFORM);
+        let ctrl = a.init(
+            "control",
+            bytemuck::bytes_of(&control),
+            storage | U::COPY_SRC | U::COPY_DST,
+        );
+        let elems_buf = a.init("elements", bytemuck::cast_slice(&elems), storage);
+        let bodies_buf = a.init("bodies", bytemuck::cast_slice(&bodies), storage);
+        let nodes = a.init(
+            "nodes",
+            bytemuck::cast_slice(&node_state),
+            storage | U::COPY_SRC | U::COPY_DST,
+        );
+        let inv_mass_buf = a.init("inv_mass", bytemuck::cast_slice(&inv_mass), storage);
+        let offsets_buf = a.init("adjacency_offsets", bytemuck::cast_slice(&offsets), storage);
+        let slots_buf = a.init("adjacency_slots", bytemuck::cast_slice(&slots), storage);
+        let elem_force = a.zeroed("element_forces", 32 * ne as u64, storage | U::COPY_SRC);
+        let elem_dt = a.zeroed("element_dt", 4 * ne as u64, storage | U::COPY_SRC);
+        let elem_state = plan
+            .has_dissipation()
+            .then(|| a.zeroed("element_dissipation", 32 * ne as u64, storage));
+        let v_prev = a.zeroed("v_prev", 8 * nn as u64, storage | U::COPY_SRC);
+        let u_snap =
+            has_fields.then(|| a.zeroed("u_snapshot", 8 * nn as u64, storage | U::COPY_SRC));
+        let cons: Vec<GpuConstraint> = model
+            .constraints
+            .iter()
+            .map(|c| GpuConstraint {
+                node: c.node,
+                mask: u32::from(c.vx.is_some()) | (u32::from(c.vy.is_some()) << 1),
+                vx: c.vx.unwrap_or(0.0) as f32,
+                vy: c.vy.unwrap_or(0.0) as f32,
+                mass: model.mass[c.node as usize] as f32,
+                _pad: [0.0; 3],
+            })
+            .collect();
+        let cons_buf =
+            (nc > 0).then(|| a.init("constraints", bytemuck::cast_slice(&cons), storage));
+        let sample_src = a.zeroed("sample_sources", 16 * (nn + ne + nc) as u64, storage);
+        let dt_partial = a.zeroed("dt_partials", 8 * params.dt_groups as u64, storage);
+        let instances_buf = a.init("instances", bytemuck::cast_slice(&instances), storage);
+        let sum_partial = a.zeroed("sum_partials", 16 * sum_groups as u64, storage);
+        let history = a.zeroed(
+            "history",
+            4 * (ROW_CAPACITY * row_stride) as u64,
+            storage | U::COPY_SRC,
+        );
+        let times_buf = a.init("times", bytemuck::cast_slice(&times), storage);
+        let indirect_init = [sum_groups, 1, 1];
+        let indirect = a.init(
+            "indirect",
+            bytemuck::cast_slice(&indirect_init),
+            storage | U::INDIRECT,
+        );
+
+        // Bind groups, once.
+        let mut el: Vec<(u32, &wgpu::Buffer)> = vec![
+            (0, &params_buf),
+            (1, &elems_buf),
+            (2, &bodies_buf),
+            (3, &nodes),
+            (4, &elem_force),
+            (5, &elem_dt),
+            (6, &ctrl),
+            (7, &sample_src),
+        ];
+        if let Some(s) = &elem_state {
+            el.push((8, s));
+        }
+        let mut nd: Vec<(u32, &wgpu::Buffer)> = vec![
+            (0, &params_buf),
+            (1, &nodes),
+            (2, &inv_mass_buf),
+            (3, &offsets_buf),
+            (4, &slots_buf),
+            (5, &elem_force),
+            (6, &v_prev),
+            (7, &ctrl),
+            (8, &sample_src),
+        ];
+        if let Some(s) = &u_snap {
+            nd.push((9, s));
+        }
+        let bind = Binds {
+            element: bind(device, "element", &kernels.element, &el),
+            min_dt: bind(
+                device,
+                "min_dt",
+                &kernels.min_dt,
+                &[(0, &params_buf), (1, &elem_dt), (2, &dt_partial)],
+            ),
+            control_dt: bind(
+                device,
+                "control_dt",
+                &kernels.control_dt,
+                &[(0, &params_buf), (1, &ctrl), (2, &dt_partial)],
+            ),
+            node: bind(device, "node", &kernels.node, &nd),
+            boundary: match (&kernels.boundary, &cons_buf) {
+                (Some(p), Some(c)) => Some(bind(
+                    device,
+                    "boundary",
+                    p,
+                    &[
+                        (0, &params_buf),
+                        (1, c),
+                        (2, &nodes),
+                        (3, &v_prev),
+                        (4, &sample_src),
+                        (5, &ctrl),
+                    ],
+                )),
+                _ => None,
+            },
+            sum: bind(
+                device,
+                "sum",
+                &kernels.sum,
+                &[
+                    (0, &params_buf),
+                    (3, &instances_buf),
+                    (4, &sample_src),
+                    (5, &sum_partial),
+                ],
+            ),
+            control_end: bind(
+                device,
+                "control_end",
+                &kernels.control_end,
+                &[
+                    (0, &params_buf),
+                    (1, &ctrl),
+                    (3, &instances_buf),
+                    (4, &sum_partial),
+                    (5, &history),
+                    (6, &times_buf),
+                    (7, &indirect),
+                ],
+            ),
+        };
+        Ok(GpuState {
+            params,
+            allocated: a.list,
+            ctrl,
+            nodes,
+            elem_force,
+            elem_dt,
+            v_prev,
+            u_snap,
+            history,
+            indirect,
+            groups: Groups {
+                element: (ne as u32).div_ceil(element::WORKGROUP),
+                node: (nn as u32).div_ceil(node::WORKGROUP),
+                boundary: (nc as u32).div_ceil(boundary::WORKGROUP),
+            },
+            bind,
+        })
+    }
+
+    /// Records one step into `pass`: element, stable step, node update, boundaries, samples, control.
+    pub fn record_step(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
+        let b = &self.bind;
+        pass.set_pipeline(&kernels.element);
+        pass.set_bind_group(0, &b.element, &[]);
+        pass.dispatch_workgroups(self.groups.element, 1, 1);
+        pass.set_pipeline(&kernels.min_dt);
+        pass.set_bind_group(0, &b.min_dt, &[]);
+        pass.dispatch_workgroups(self.params.dt_groups, 1, 1);
+        pass.set_pipeline(&kernels.control_dt);
+        pass.set_bind_group(0, &b.control_dt, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipeline(&kernels.node);
+        pass.set_bind_group(0, &b.node, &[]);
+        pass.dispatch_workgroups(self.groups.node, 1, 1);
+        if let (Some(p), Some(bg)) = (&kernels.boundary, &b.boundary) {
+            pass.set_pipeline(p);
+            pass.set_bind_group(0, bg, &[]);
+            pass.dispatch_workgroups(self.groups.boundary, 1, 1);
+        }
+        pass.set_pipeline(&kernels.sum);
+        pass.set_bind_group(0, &b.sum, &[]);
+        pass.dispatch_workgroups_indirect(&self.indirect, 0);
+        pass.set_pipeline(&kernels.control_end);
+        pass.set_bind_group(0, &b.control_end, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+
+    /// Records only the element stage (for kernel tests and stage timing).
+    pub fn record_element(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
+        pass.set_pipeline(&kernels.element);
+        pass.set_bind_group(0, &self.bind.element, &[]);
+        pass.dispatch_workgroups(self.groups.element, 1, 1);
+    }
+
+    /// Records only the node stage (for stage timing).
+    pub fn record_node(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
+        pass.set_pipeline(&kernels.node);
+        pass.set_bind_group(0, &self.bind.node, &[]);
+        pass.dispatch_workgroups(self.groups.node, 1, 1);
+    }
+
+    /// Records only the stable-step reduction and control (for stage timing).
+    pub fn record_control(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
+        let b = &self.bind;
+        pass.set_pipeline(&kernels.min_dt);
+        pass.set_bind_group(0, &b.min_dt, &[]);
+        pass.dispatch_workgroups(self.params.dt_groups, 1, 1);
+        pass.set_pipeline(&kernels.control_dt);
+        pass.set_bind_group(0, &b.control_dt, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipeline(&kernels.control_end);
+        pass.set_bind_group(0, &b.control_end, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+
+    /// Total bytes allocated on the device.
+    pub fn bytes(&self) -> u64 {
+        self.allocated.iter().map(|(_, b)| b).sum()
+    }
+}

@@ -1,0 +1,401 @@
+//! GPU backend tests: shader validation (no GPU needed), kernel-level comparison with the CPU
+//! reference, parity of whole runs, bit-reproducibility, and submission/readback counts.
+//!
+//! On a machine without an adapter these tests print that they were skipped; with `CI` set they
+//! fail instead, so a CI machine without lavapipe cannot pass silently.
+#![allow(clippy::needless_range_loop)]
+
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+
+use ricochet::gpu::kernels::Kernels;
+use ricochet::gpu::shader::{self, Features};
+use ricochet::gpu::{GpuContext, GpuSolver};
+use ricochet::model::Model;
+use ricochet::plan::Plan;
+use ricochet::run::{run, schedule};
+use ricochet::scene::Scene;
+use ricochet::step::cpu::CpuSolver;
+use ricochet::step::element::{evaluate, Dissipation};
+use ricochet::step::Solver;
+
+/// One GPU test at a time: lavapipe shares the machine's two cores.
+static GPU_LOCK: Mutex<()> = Mutex::new(());
+
+fn context() -> Option<Arc<GpuContext>> {
+    match GpuContext::shared() {
+        Ok(ctx) => Some(ctx),
+        Err(e) => {
+            if std::env::var_os("CI").is_some() {
+                panic!("CI is set but no GPU adapter is available: {e}");
+            }
+            eprintln!("skipped: no GPU adapter ({e})");
+            None
+        }
+    }
+}
+
+fn load(text: &str, name: &str) -> (Scene, Model, Plan) {
+    let scene = Scene::parse(text, Path::new(name)).expect("scene parses");
+    let model = Model::build(&scene).expect("model builds");
+    let plan = Plan::new(&scene, &model);
+    (scene, model, plan)
+}
+
+fn asset(name: &str) -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets")
+            .join(name),
+    )
+    .expect("asset exists")
+}
+
+#[test]
+fn every_shader_variant_validates_with_naga() {
+    for features in Features::all() {
+        for (name, src) in Kernels::sources() {
+            let wgsl = shader::source(src, features);
+            shader::validate(name, &wgsl).unwrap_or_else(|e| panic!("{features:?}: {e}"));
+        }
+    }
+}
+
+#[test]
+fn variants_compile_only_what_the_scene_needs() {
+    let plain = shader::source(ricochet::gpu::element::SOURCE, Features::default());
+    assert!(
+        !plain.contains("elem_state"),
+        "no dissipation buffer without dissipation"
+    );
+    let diss = shader::source(
+        ricochet::gpu::element::SOURCE,
+        Features {
+            dissipation: true,
+            ..Features::default()
+        },
+    );
+    assert!(diss.contains("elem_state"));
+    let node = shader::source(ricochet::gpu::node::SOURCE, Features::default());
+    assert!(
+        !node.contains("u_snap"),
+        "no snapshot buffer without fields"
+    );
+}
+
+/// A scene of `n` x `m` distorted elements with all material and hourglass variants.
+fn mixed_scene() -> String {
+    let mut s = String::from(
+        "[run]\nend_time = 1.0e-4\n\n\
+         [[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\ndensity = 7850.0\nyoungs_modulus = 2.1e11\npoisson_ratio = 0.3\n\n\
+         [[material]]\nname = \"rubber\"\nmodel = \"neo_hookean\"\ndensity = 1100.0\nyoungs_modulus = 1.0e7\npoisson_ratio = 0.45\n",
+    );
+    let combos = [
+        ("steel", "plane_strain", "viscous"),
+        ("steel", "plane_stress", "stiffness"),
+        ("rubber", "plane_strain", "stiffness"),
+        ("rubber", "plane_stress", "viscous"),
+        ("steel", "plane_strain", "none"),
+    ];
+    for (k, (mat, form, hg)) in combos.iter().enumerate() {
+        // Odd sizes: not multiples of the workgroup size.
+        s.push_str(&format!(
+            "\n[[body]]\nname = \"b{k}\"\nmaterial = \"{mat}\"\nformulation = \"{form}\"\nthickness = 0.02\n\
+             mesh = {{ rectangle = {{ origin = [{x}, 0.0], size = [0.03, 0.02], cells = [{nx}, 3] }} }}\n\
+             hourglass = {{ form = \"{hg}\", coefficient = 0.1 }}\n",
+            x = 0.1 * k as f64,
+            nx = 5 + 2 * k
+        ));
+    }
+    s
+}
+
+/// Deterministic pseudo-random numbers in [-1, 1).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+}
+
+#[test]
+fn element_kernel_matches_cpu_reference_on_random_states() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let (scene, model, plan) = load(&mixed_scene(), "mixed.toml");
+    let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
+    let mut rng = Lcg(7);
+    // Cases: zero state, small random strains (1e-3 of the element size), larger ones (3e-2),
+    // and random velocities (bulk viscosity and viscous hourglass active).
+    let h = 0.006;
+    for (amp_u, amp_v) in [
+        (0.0, 0.0),
+        (1e-3 * h, 0.0),
+        (3e-2 * h, 0.0),
+        (1e-3 * h, 5.0),
+    ] {
+        let u: Vec<[f64; 2]> = (0..model.node_count())
+            .map(|_| [amp_u * rng.next(), amp_u * rng.next()])
+            .collect();
+        let v: Vec<[f64; 2]> = (0..model.node_count())
+            .map(|_| [amp_v * rng.next(), amp_v * rng.next()])
+            .collect();
+        let (forces, dts) = gpu.element_stage(&u, &v).expect("element stage");
+        let mut worst: f64 = 0.0;
+        for e in 0..model.element_count() {
+            let q = model.quads[e];
+            let ue = q.map(|i| u[i as usize]);
+            let ve = q.map(|i| v[i as usize]);
+            let cpu = evaluate(
+                model.params(e),
+                &model.corners[e],
+                &ue,
+                &ve,
+                &Dissipation::default(),
+                0.0,
+            );
+            let scale = cpu
+                .force
+                .iter()
+                .map(|f| f[0].abs().max(f[1].abs()))
+                .fold(0.0f64, f64::max)
+                .max(1e-30);
+            for a in 0..4 {
+                for c in 0..2 {
+                    let d = (forces[e][a][c] - cpu.force[a][c]).abs() / scale;
+                    worst = worst.max(d);
+                }
+            }
+            let ddt = (dts[e] - cpu.dt).abs() / cpu.dt;
+            assert!(ddt < 1e-5, "element {e}: dt {} vs {}", dts[e], cpu.dt);
+        }
+        // f32 against f64: relative to the element's largest force component.
+        eprintln!("amp_u {amp_u:e} amp_v {amp_v}: worst relative force difference {worst:.2e}");
+        assert!(worst < 2e-3, "worst relative force difference {worst:e}");
+    }
+}
+
+/// Runs `text` on both backends and returns (cpu samples, gpu samples, cpu u, gpu u).
+#[allow(clippy::type_complexity)]
+fn both(
+    ctx: Arc<GpuContext>,
+    text: &str,
+    name: &str,
+) -> (
+    Vec<ricochet::step::Sample>,
+    Vec<ricochet::step::Sample>,
+    Vec<[f64; 2]>,
+    Vec<[f64; 2]>,
+    u64,
+    u64,
+) {
+    let (scene, model, plan) = load(text, name);
+    let dir = std::env::temp_dir().join(format!("ricochet-gpu-{}-{name}", std::process::id()));
+    let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
+    let rc = run(&scene, &model, &plan, &mut cpu, &dir.join("cpu"), None).expect("cpu run");
+    assert_eq!(rc.summary.status, "completed", "{}", rc.summary.message);
+    let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
+    let rg = run(&scene, &model, &plan, &mut gpu, &dir.join("gpu"), None).expect("gpu run");
+    assert_eq!(rg.summary.status, "completed", "{}", rg.summary.message);
+    let (ug, _) = gpu.nodes().expect("nodes");
+    let _ = std::fs::remove_dir_all(&dir);
+    (
+        rc.samples.into_iter().map(|s| s.0).collect(),
+        rg.samples.into_iter().map(|s| s.0).collect(),
+        cpu.displacement().to_vec(),
+        ug,
+        cpu.steps(),
+        gpu.steps(),
+    )
+}
+
+fn parity(name: &str, text: &str) {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let (sc, sg, uc, ug, nc, ng) = both(ctx, text, name);
+    assert!(nc.abs_diff(ng) <= 1, "{name}: {nc} and {ng} steps");
+    assert_eq!(sc.len(), sg.len(), "{name}: same number of history rows");
+    let umax = uc.iter().map(|u| u[0].hypot(u[1])).fold(0.0f64, f64::max);
+    let du = uc
+        .iter()
+        .zip(&ug)
+        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+        .fold(0.0f64, f64::max);
+    let emax = sc
+        .iter()
+        .map(|s| {
+            s.kinetic.abs()
+                + s.internal.abs()
+                + s.hourglass.abs()
+                + s.viscous.abs()
+                + s.external.abs()
+        })
+        .fold(0.0f64, f64::max);
+    let mut de: f64 = 0.0;
+    let mut shifted = 0;
+    for (a, b) in sc.iter().zip(&sg) {
+        // With a variable step, f32 and f64 may put a row time on either side of a step boundary.
+        assert!(
+            a.step.abs_diff(b.step) <= 1,
+            "{name}: rows at steps {} and {}",
+            a.step,
+            b.step
+        );
+        shifted += usize::from(a.step != b.step);
+        for (x, y) in [
+            (a.kinetic, b.kinetic),
+            (a.internal, b.internal),
+            (a.hourglass, b.hourglass),
+            (a.viscous, b.viscous),
+            (a.external, b.external),
+        ] {
+            de = de.max((x - y).abs() / emax);
+        }
+    }
+    eprintln!(
+        "{name}: {nc} steps, displacement difference {:.2e} of max {umax:.3e}, energy difference {de:.2e}, {shifted} of {} rows one step apart",
+        du / umax,
+        sc.len()
+    );
+    assert!(
+        du / umax < 1e-4,
+        "{name}: displacement difference {:e} relative",
+        du / umax
+    );
+    assert!(de < 1e-4, "{name}: energy difference {de:e} relative");
+}
+
+#[test]
+fn parity_vibrating_block() {
+    parity("vibrating_block", &asset("vibrating_block.toml"));
+}
+
+#[test]
+fn parity_spinning_disk() {
+    parity("spinning_disk", &asset("spinning_disk.toml"));
+}
+
+#[test]
+fn parity_rods() {
+    parity("rods", &asset("rods.toml"));
+}
+
+#[test]
+fn parity_mixed_materials_with_boundaries() {
+    let mut s = mixed_scene();
+    s = s.replace(
+        "end_time = 1.0e-4",
+        "end_time = 2.0e-5\nhistory_interval = 1.0e-6",
+    );
+    s.push_str("\n[[boundary]]\nbody = \"b0\"\nregion = { min = [-1.0, -1.0], max = [0.0001, 1.0] }\nvelocity = { x = 2.0, y = 0.0 }\n");
+    s.push_str("\n[[boundary]]\nbody = \"b3\"\nregion = { min = [-1.0, -1.0], max = [1.0, 0.0001] }\nvelocity = { y = -1.0 }\n");
+    parity("mixed", &s);
+}
+
+#[test]
+fn same_scene_twice_gives_identical_bits() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text = asset("spinning_disk.toml").replace("end_time = 0.05", "end_time = 0.01");
+    let (scene, model, plan) = load(&text, "disk.toml");
+    let dir = std::env::temp_dir().join(format!("ricochet-det-{}", std::process::id()));
+    let mut outs = Vec::new();
+    for k in 0..2 {
+        let mut gpu =
+            GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu solver");
+        let out = dir.join(format!("run{k}"));
+        let r = run(&scene, &model, &plan, &mut gpu, &out, None).expect("gpu run");
+        assert_eq!(r.summary.status, "completed");
+        let (u, v) = gpu.nodes().expect("nodes");
+        let history = std::fs::read(out.join("history.csv")).expect("history");
+        let mut fields = Vec::new();
+        for entry in std::fs::read_dir(out.join("fields")).expect("fields") {
+            let p = entry.expect("entry").path();
+            fields.push((
+                p.file_name().map(|s| s.to_owned()),
+                std::fs::read(&p).expect("field"),
+            ));
+        }
+        fields.sort();
+        outs.push((u, v, history, fields));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let bits = |x: &Vec<[f64; 2]>| {
+        x.iter()
+            .map(|p| (p[0].to_bits(), p[1].to_bits()))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        bits(&outs[0].0),
+        bits(&outs[1].0),
+        "displacements differ between runs"
+    );
+    assert_eq!(
+        bits(&outs[0].1),
+        bits(&outs[1].1),
+        "velocities differ between runs"
+    );
+    assert_eq!(outs[0].2, outs[1].2, "history.csv differs between runs");
+    assert!(!outs[0].3.is_empty());
+    assert_eq!(outs[0].3, outs[1].3, "field files differ between runs");
+}
+
+#[test]
+fn batches_steps_and_reads_back_about_once_per_history_row() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    // 10^4 steps with 100 history rows on a small block with a fixed step.
+    let text = "[run]\nend_time = 1.0e-3\ntime_step = 1.0e-7\nhistory_interval = 1.0e-5\n\n\
+        [[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\ndensity = 7850.0\nyoungs_modulus = 2.1e11\npoisson_ratio = 0.3\n\n\
+        [[body]]\nname = \"block\"\nmaterial = \"steel\"\nmesh = { rectangle = { origin = [0.0, 0.0], size = [0.05, 0.05], cells = [8, 8] } }\n\
+        velocity_gradient = [[10.0, 0.0], [0.0, -10.0]]\n";
+    let (scene, model, plan) = load(text, "counts.toml");
+    let dir = std::env::temp_dir().join(format!("ricochet-counts-{}", std::process::id()));
+    let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
+    let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("run");
+    let _ = std::fs::remove_dir_all(&dir);
+    let s = &r.summary;
+    assert_eq!(s.status, "completed", "{}", s.message);
+    assert_eq!(s.steps, 10_000);
+    assert_eq!(s.history_rows, 101);
+    eprintln!(
+        "{} steps, {} rows: {} submissions, {} readbacks",
+        s.steps, s.history_rows, s.gpu_submissions, s.gpu_readbacks
+    );
+    assert!(
+        s.gpu_readbacks <= s.history_rows as u64 + 5,
+        "{} readbacks for {} rows",
+        s.gpu_readbacks,
+        s.history_rows
+    );
+    assert!(
+        s.gpu_submissions * 32 <= s.steps + 32,
+        "{} submissions for {} steps",
+        s.gpu_submissions,
+        s.steps
+    );
+}
+
+#[test]
+fn unstable_gpu_run_stops_with_a_diagnostic() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    // A step far above the stable limit.
+    let text = asset("vibrating_block.toml").replace("time_step = 2.0e-7", "time_step_scale = 1.8");
+    let (scene, model, plan) = load(&text, "unstable.toml");
+    let dir = std::env::temp_dir().join(format!("ricochet-unstable-{}", std::process::id()));
+    let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
+    let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("run");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(r.summary.status, "failed");
+    let m = &r.summary.message;
+    assert!(
+        m.contains("step ")
+            && (m.contains("element") || m.contains("node") || m.contains("energy")),
+        "{m}"
+    );
+}
