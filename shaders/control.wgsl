@@ -95,20 +95,8 @@ fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
         fail(4u, at, dt_next);
         return;
     }
-    // The last step ends exactly at end_time.
-    let t = vec2<u32>(ctrl.t_lo, ctrl.t_hi);
-    let end = vec2<u32>(params.end_lo, params.end_hi);
-    if (!ge64(t, end)) {
-        let lo = end.x - t.x;
-        let hi = end.y - t.y - select(0u, 1u, end.x < t.x);
-        let remaining = (f32(hi) * 4294967296.0 + f32(lo)) / params.ticks_per_second;
-        if (remaining > dt_next) {
-            ctrl.dt_min = min(ctrl.dt_min, dt_next);
-            ctrl.dt_max = max(ctrl.dt_max, dt_next);
-        } else {
-            dt_next = remaining;
-        }
-    }
+    ctrl.dt_min = min(ctrl.dt_min, dt_next);
+    ctrl.dt_max = max(ctrl.dt_max, dt_next);
     if (ctrl.step == 0u) {
         ctrl.dt_node = 0.5 * dt_next;
     } else {

@@ -4,7 +4,7 @@ use crate::error::Result;
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
 
-use super::element::{evaluate, Dissipation};
+use super::element::{evaluate, evaluate_with, quad_geometry, Dissipation, QuadGeometry};
 use super::{Clock, Event, Failure, Sample, Schedule, Snapshot, Solver};
 
 /// Explicit central-difference integration of a [`Model`] on the CPU.
@@ -23,6 +23,8 @@ pub struct CpuSolver {
     v_prev: Vec<[f64; 2]>,
     /// Nodal forces f_n.
     f: Vec<[f64; 2]>,
+    /// Reference geometry of each element (constant).
+    geometry: Vec<QuadGeometry>,
     /// Dissipative element state (empty when the plan has none).
     dissipation: Vec<Dissipation>,
     hourglass_work: f64,
@@ -55,6 +57,7 @@ impl CpuSolver {
             Vec::new()
         };
         Self {
+            geometry: model.corners.iter().map(quad_geometry).collect(),
             inv_mass: model.mass.iter().map(|m| 1.0 / m).collect(),
             u: vec![[0.0; 2]; nn],
             v: model.velocity.clone(),
@@ -178,8 +181,9 @@ impl CpuSolver {
             } else {
                 Dissipation::default()
             };
-            let out = evaluate(
+            let out = evaluate_with(
                 self.model.params(e),
+                &self.geometry[e],
                 &self.model.corners[e],
                 &ue,
                 &ve,
@@ -263,16 +267,7 @@ impl CpuSolver {
             );
             return self.fail(events, msg);
         }
-        // The last step ends exactly at end_time.
-        let remaining = s.end_time - self.t;
-        let dt_next = if remaining > 0.0 {
-            dt_next.min(remaining)
-        } else {
-            dt_next
-        };
-        if remaining > dt_next || self.n == 0 {
-            self.dt_range = (self.dt_range.0.min(dt_next), self.dt_range.1.max(dt_next));
-        }
+        self.dt_range = (self.dt_range.0.min(dt_next), self.dt_range.1.max(dt_next));
         // 3. Node stage.
         let dt_n = if self.n == 0 {
             0.5 * dt_next

@@ -34,6 +34,8 @@ pub struct ElementParams {
     pub lambda_plane: f64,
     /// Modulus that sets the element's fastest (dilatational) mode: lambda_plane + 2 mu + max(lambda_plane, 0).
     pub wave_modulus: f64,
+    /// sqrt(wave_modulus / density): the speed of that mode in the reference state.
+    pub reference_speed: f64,
     /// Hourglass form.
     pub hourglass: HourglassForm,
     /// Hourglass coefficient.
@@ -71,6 +73,8 @@ impl ElementParams {
             mu,
             lambda_plane,
             wave_modulus: lambda_plane + 2.0 * mu + lambda_plane.max(0.0),
+            reference_speed: ((lambda_plane + 2.0 * mu + lambda_plane.max(0.0)) / material.density)
+                .sqrt(),
             hourglass,
             hourglass_coefficient,
             bulk_linear: bulk.0,
@@ -139,6 +143,7 @@ pub struct QuadGeometry {
 }
 
 /// Centre gradients and hourglass vector of the quad with corners `x` (counter-clockwise).
+#[inline]
 pub fn quad_geometry(x: &[[f64; 2]; 4]) -> QuadGeometry {
     let (x1, x2, x3, x4) = (x[0][0], x[1][0], x[2][0], x[3][0]);
     let (y1, y2, y3, y4) = (x[0][1], x[1][1], x[2][1], x[3][1]);
@@ -165,6 +170,7 @@ pub fn quad_geometry(x: &[[f64; 2]; 4]) -> QuadGeometry {
 
 /// Characteristic length of a quad: area over max(longest side, longest diagonal / sqrt 2).
 /// Equal to the side for a square, to the short side for a thin rectangle.
+#[inline]
 pub fn characteristic_length(x: &[[f64; 2]; 4], area: f64) -> f64 {
     let d = |a: usize, b: usize| {
         let dx = x[b][0] - x[a][0];
@@ -177,6 +183,7 @@ pub fn characteristic_length(x: &[[f64; 2]; 4], area: f64) -> f64 {
 }
 
 /// Smallest corner Jacobian of `x`, relative to the quad's area (1 for a parallelogram).
+#[inline]
 pub fn min_corner_ratio(x: &[[f64; 2]; 4], area: f64) -> f64 {
     let mut m = f64::INFINITY;
     for a in 0..4 {
@@ -200,6 +207,7 @@ fn det(f: &[f64; 4]) -> f64 {
 /// Evaluates one element. `dx`: reference corner offsets; `u`, `v`: corner displacements and
 /// lagged velocities; `prev`: the dissipative state of the previous step; `dt_prev`: the step
 /// that took u^{n-1} to u^n (0 on the first step, which dissipates nothing).
+#[inline]
 pub fn evaluate(
     p: &ElementParams,
     dx: &[[f64; 2]; 4],
@@ -208,7 +216,21 @@ pub fn evaluate(
     prev: &Dissipation,
     dt_prev: f64,
 ) -> ElementOut {
-    let g = quad_geometry(dx);
+    evaluate_with(p, &quad_geometry(dx), dx, u, v, prev, dt_prev)
+}
+
+/// [`evaluate`] with the reference geometry `g` of `dx` computed ahead (the solver keeps it per
+/// element, since it never changes).
+#[inline]
+pub fn evaluate_with(
+    p: &ElementParams,
+    g: &QuadGeometry,
+    dx: &[[f64; 2]; 4],
+    u: &[[f64; 2]; 4],
+    v: &[[f64; 2]; 4],
+    prev: &Dissipation,
+    dt_prev: f64,
+) -> ElementOut {
     let a0t = g.area * p.thickness;
     // Deformation gradient F = I + sum_a u_a (x) b_a and its rate.
     let mut f = [1.0, 0.0, 0.0, 1.0];
@@ -264,7 +286,7 @@ pub fn evaluate(
             hourglass_stored = 0.5 * k * (q[0] * q[0] + q[1] * q[1]);
         }
         HourglassForm::Viscous => {
-            let c0 = (p.wave_modulus / p.density).sqrt();
+            let c0 = p.reference_speed;
             let damp = p.hourglass_coefficient * p.density * c0 * a0t * bb.sqrt() / gg;
             let mut qd = [0.0; 2];
             for a in 0..4 {
@@ -342,6 +364,7 @@ pub fn evaluate(
 
 /// First Piola-Kirchhoff stress (xx xy yx yy), strain energy per reference volume, and the Cauchy
 /// stress (xx yy xy zz) for the deformation gradient `f` with determinant `j`.
+#[inline]
 pub fn stress(p: &ElementParams, f: &[f64; 4], j: f64) -> ([f64; 4], f64, [f64; 4]) {
     match p.model {
         MaterialModel::LinearElastic => {

@@ -1,0 +1,32 @@
+//! The core test suite of ricochet: the CPU reference path against analytic values.
+//!
+//! One test binary (to keep link time down) with one module per topic under `tests/core/`:
+//!
+//! - [`patch`]: constant-strain patch tests (single quad, distorted patches), exact stress;
+//! - [`rigid`]: rigid translation and (large) rotation of neo-Hookean elements, spinning disk;
+//! - [`hourglass`]: hourglass modes, their control (stiffness, viscous) and reported energy;
+//! - [`mass`]: lumped mass and momentum conservation;
+//! - [`wave`]: 1D waves in a rod strip against the dispersion table of `REFERENCES.md` section 2;
+//! - [`energy`]: the energy audit of a free-vibrating block (conservative and dissipative);
+//! - [`bad_input`]: every rejected scene exits with status 2 and names the file, key and value;
+//! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs.
+
+#[path = "core/common.rs"]
+mod common;
+
+#[path = "core/bad_input.rs"]
+mod bad_input;
+#[path = "core/energy.rs"]
+mod energy;
+#[path = "core/hourglass.rs"]
+mod hourglass;
+#[path = "core/mass.rs"]
+mod mass;
+#[path = "core/outputs.rs"]
+mod outputs;
+#[path = "core/patch.rs"]
+mod patch;
+#[path = "core/rigid.rs"]
+mod rigid;
+#[path = "core/wave.rs"]
+mod wave;

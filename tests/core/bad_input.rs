@@ -1,0 +1,379 @@
+//! Bad input: every rejected scene makes the binary exit with status 2 and an error on stderr
+//! that names the file, the key and the offending value -- never a panic. Both `check` and
+//! `run` are exercised on each case.
+
+use std::path::PathBuf;
+use std::process::Output;
+
+use crate::common::*;
+
+const MATERIAL: &str = r#"
+[[material]]
+name = "steel"
+model = "linear_elastic"
+density = 7850.0
+youngs_modulus = 2.1e11
+poisson_ratio = 0.3
+"#;
+
+const BODY: &str = r#"
+[[body]]
+name = "block"
+material = "steel"
+mesh = { rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }
+"#;
+
+const RUN: &str = "[run]\nend_time = 1.0e-5\n";
+
+/// The valid base scene.
+fn valid() -> String {
+    format!("{RUN}{MATERIAL}{BODY}")
+}
+
+/// A valid scene with `from` replaced by `to` (which must occur).
+fn variant(from: &str, to: &str) -> String {
+    let base = valid();
+    assert!(base.contains(from), "{from:?} not in the base scene");
+    base.replacen(from, to, 1)
+}
+
+/// Writes `text` to a fresh folder as `<case>.toml`.
+fn write_scene(case: &str, text: &str) -> (PathBuf, PathBuf) {
+    let dir = tmp_dir(&format!("bad-{case}"));
+    let file = dir.join(format!("{case}.toml"));
+    std::fs::write(&file, text).unwrap();
+    (dir, file)
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Runs `check` and `run` on the scene; both must exit with 2 and name the file and every
+/// string of `needles` on stderr.
+fn expect_rejected(case: &str, text: &str, needles: &[&str]) {
+    let (dir, file) = write_scene(case, text);
+    let f = file.to_str().unwrap();
+    let out = dir.join("out");
+    for args in [
+        vec!["check", f],
+        vec!["run", f, "--backend", "cpu", "--out", out.to_str().unwrap()],
+    ] {
+        let o = run_bin(&args);
+        let err = stderr(&o);
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{case}: `ricochet {}` exited with {:?}; stderr:\n{err}",
+            args[0],
+            o.status.code()
+        );
+        assert!(!err.contains("panicked"), "{case}: panic:\n{err}");
+        assert!(
+            err.contains(f),
+            "{case}: stderr does not name the file:\n{err}"
+        );
+        for n in needles {
+            assert!(
+                err.contains(n),
+                "{case}: stderr does not contain {n:?}:\n{err}"
+            );
+        }
+    }
+    assert!(
+        !out.join("summary.json").exists(),
+        "{case}: a rejected scene must not produce outputs"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn negative_density() {
+    expect_rejected(
+        "negative_density",
+        &variant("density = 7850.0", "density = -7850.0"),
+        &["material[0].density", "-7850.0"],
+    );
+}
+
+#[test]
+fn non_positive_youngs_modulus() {
+    expect_rejected(
+        "zero_modulus",
+        &variant("youngs_modulus = 2.1e11", "youngs_modulus = 0.0"),
+        &["material[0].youngs_modulus", "0.0"],
+    );
+}
+
+#[test]
+fn poisson_ratio_of_one_half() {
+    expect_rejected(
+        "poisson_half",
+        &variant("poisson_ratio = 0.3", "poisson_ratio = 0.5"),
+        &["material[0].poisson_ratio", "0.5"],
+    );
+}
+
+#[test]
+fn poisson_ratio_above_one_half() {
+    expect_rejected(
+        "poisson_high",
+        &variant("poisson_ratio = 0.3", "poisson_ratio = 0.7"),
+        &["material[0].poisson_ratio", "0.7"],
+    );
+}
+
+#[test]
+fn unknown_material_model() {
+    expect_rejected(
+        "unknown_model",
+        &variant("model = \"linear_elastic\"", "model = \"elastic\""),
+        &["material[0].model", "\"elastic\""],
+    );
+}
+
+#[test]
+fn unknown_material_name() {
+    expect_rejected(
+        "unknown_material",
+        &variant("material = \"steel\"", "material = \"stel\""),
+        &["body[0].material", "\"stel\""],
+    );
+}
+
+#[test]
+fn duplicate_body_name() {
+    let text = format!("{}{BODY}", valid());
+    expect_rejected("duplicate_body", &text, &["body[1].name", "\"block\""]);
+}
+
+#[test]
+fn zero_rectangle_cells() {
+    expect_rejected(
+        "zero_cells",
+        &variant("cells = [4, 2]", "cells = [0, 2]"),
+        &["body[0].mesh.rectangle.cells", "[0, 2]"],
+    );
+}
+
+#[test]
+fn zero_disk_cells() {
+    expect_rejected(
+        "zero_disk_cells",
+        &variant(
+            "{ rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }",
+            "{ disk = { center = [0.0, 0.0], radius = 0.05, cells = 0 } }",
+        ),
+        &["body[0].mesh.disk.cells", "0"],
+    );
+}
+
+#[test]
+fn negative_rectangle_size() {
+    expect_rejected(
+        "negative_size",
+        &variant("size = [0.1, 0.05]", "size = [0.1, -0.05]"),
+        &["body[0].mesh.rectangle.size", "[0.1, -0.05]"],
+    );
+}
+
+#[test]
+fn non_positive_thickness() {
+    expect_rejected(
+        "zero_thickness",
+        &variant(
+            "material = \"steel\"\n",
+            "material = \"steel\"\nthickness = -0.01\n",
+        ),
+        &["body[0].thickness", "-0.01"],
+    );
+}
+
+#[test]
+fn inverted_explicit_mesh() {
+    // A clockwise quad: negative area.
+    expect_rejected(
+        "inverted_mesh",
+        &variant(
+            "{ rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }",
+            "{ nodes = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], quads = [[0, 3, 2, 1]] }",
+        ),
+        &["body[0].mesh", "quad 0 = [0, 3, 2, 1]", "area -1"],
+    );
+}
+
+#[test]
+fn zero_area_explicit_mesh() {
+    // Four collinear nodes.
+    expect_rejected(
+        "zero_area_mesh",
+        &variant(
+            "{ rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }",
+            "{ nodes = [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]], quads = [[0, 1, 2, 3]] }",
+        ),
+        &["body[0].mesh", "quad 0 = [0, 1, 2, 3]", "area 0"],
+    );
+}
+
+#[test]
+fn non_convex_explicit_mesh() {
+    // A dart: positive area but a re-entrant corner.
+    expect_rejected(
+        "dart_mesh",
+        &variant(
+            "{ rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }",
+            "{ nodes = [[0.0, 0.0], [1.0, 0.0], [0.3, 0.3], [0.0, 1.0]], quads = [[0, 1, 2, 3]] }",
+        ),
+        &["body[0].mesh", "quad 0 = [0, 1, 2, 3]"],
+    );
+}
+
+#[test]
+fn explicit_mesh_index_out_of_range() {
+    expect_rejected(
+        "index_mesh",
+        &variant(
+            "{ rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }",
+            "{ nodes = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]], quads = [[0, 1, 2, 4]] }",
+        ),
+        &["body[0].mesh.quads[0]", "[0, 1, 2, 4]"],
+    );
+}
+
+#[test]
+fn boundary_box_selects_no_node() {
+    let text = format!(
+        "{}\n[[boundary]]\nbody = \"block\"\nregion = {{ min = [5.0, 5.0], max = [6.0, 6.0] }}\nvelocity = {{ x = 0.0 }}\n",
+        valid()
+    );
+    expect_rejected(
+        "empty_boundary",
+        &text,
+        &["boundary[0].region", "min = [5.0, 5.0]", "max = [6.0, 6.0]"],
+    );
+}
+
+#[test]
+fn boundary_on_unknown_body() {
+    let text = format!(
+        "{}\n[[boundary]]\nbody = \"blok\"\nregion = {{ min = [-1.0, -1.0], max = [1.0, 1.0] }}\nvelocity = {{ x = 0.0 }}\n",
+        valid()
+    );
+    expect_rejected("unknown_body", &text, &["boundary[0].body", "\"blok\""]);
+}
+
+#[test]
+fn non_positive_time_step_scale() {
+    expect_rejected(
+        "zero_scale",
+        &variant(
+            "end_time = 1.0e-5\n",
+            "end_time = 1.0e-5\ntime_step_scale = 0.0\n",
+        ),
+        &["run.time_step_scale", "0.0"],
+    );
+}
+
+#[test]
+fn unknown_key_names_the_line() {
+    // A typo: `densty`. The parser names the line, the column and the unknown key.
+    expect_rejected(
+        "typo",
+        &variant("density = 7850.0", "densty = 7850.0"),
+        &["line 7", "densty", "unknown field"],
+    );
+}
+
+#[test]
+fn missing_end_time_names_the_line() {
+    expect_rejected(
+        "no_end_time",
+        &variant("end_time = 1.0e-5\n", "history_interval = 1.0e-6\n"),
+        &["line 1", "end_time", "missing field"],
+    );
+}
+
+#[test]
+fn not_toml_at_all() {
+    expect_rejected("garbage", "[run\nend_time = = 1\n", &["line 1"]);
+}
+
+#[test]
+fn missing_file() {
+    let dir = tmp_dir("bad-missing");
+    let file = dir.join("does_not_exist.toml");
+    let f = file.to_str().unwrap();
+    for args in [vec!["check", f], vec!["run", f, "--backend", "cpu"]] {
+        let o = run_bin(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(f) && err.contains("cannot read"), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn negative_end_time_on_the_command_line() {
+    let (dir, file) = write_scene("cli_end_time", &valid());
+    let o = run_bin(&[
+        "run",
+        file.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--end-time=-1",
+        "--out",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--end-time") && err.contains("-1.0"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn fixed_time_step_above_the_stable_step() {
+    // The block's stable step is about 3.5e-6 s (h = 0.025 m, c = 7170 m/s).
+    let text = variant(
+        "end_time = 1.0e-5\n",
+        "end_time = 1.0e-5\ntime_step = 1.0e-5\n",
+    );
+    let (dir, file) = write_scene("big_step", &text);
+    let f = file.to_str().unwrap();
+    // `check` rejects it as bad input.
+    let o = run_bin(&["check", f]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(f) && err.contains("run.time_step") && err.contains("1e-5"),
+        "{err}"
+    );
+    // `run` refuses to integrate with it and names the element that limits the step. (It
+    // reports this as a run that failed at step 0, exit status 3, not as bad input.)
+    let o = run_bin(&[
+        "run",
+        f,
+        "--backend",
+        "cpu",
+        "--out",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains("time_step") && err.contains("element"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_base_scene_is_valid() {
+    // Guards the cases above: they differ from a scene that passes.
+    let (dir, file) = write_scene("valid", &valid());
+    let o = run_bin(&["check", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,426 @@
+//! Outputs and the command line: `history.csv` with the documented columns, `summary.json` with
+//! the documented keys, VTU fields and their PVD collection (read back with a real VTK reader,
+//! meshio, through `tests/read_vtu.py`), `check`, the plan's stages, the example scenes, and
+//! unstable runs that end with status "failed", exit code 3 and a message naming the step and
+//! the element or node.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use ricochet::model::Model;
+use ricochet::plan::{Plan, Stage};
+use ricochet::scene::Scene;
+use serde_json::Value;
+
+use crate::common::*;
+
+fn asset(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(name)
+}
+
+fn summary(dir: &Path) -> Value {
+    let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("summary.json is JSON")
+}
+
+const HISTORY_COLUMNS: &str = "time,step,dt,kinetic_energy,internal_energy,hourglass_energy,viscous_work,external_work,energy_error";
+
+#[test]
+fn run_writes_history_summary_and_fields() {
+    let dir = tmp_dir("outputs-block");
+    let o = run_bin(&[
+        "run",
+        asset("vibrating_block.toml").to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(stdout.contains("completed"), "{stdout}");
+
+    // history.csv: the documented header, one row per history_interval (2e-6 s over 2e-4 s).
+    let text = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    assert_eq!(
+        text.lines().next().unwrap(),
+        format!("{HISTORY_COLUMNS},block.vx,block.vy")
+    );
+    let (header, rows) = read_csv(&dir.join("history.csv"));
+    assert_eq!(rows.len(), 101);
+    let (t, step, dt, err) = (
+        column(&header, "time"),
+        column(&header, "step"),
+        column(&header, "dt"),
+        column(&header, "energy_error"),
+    );
+    for (k, r) in rows.iter().enumerate() {
+        assert!(
+            (r[t] - 2e-6 * k as f64).abs() < 1e-9 * 2e-6,
+            "row {k}: time {}",
+            r[t]
+        );
+        assert_eq!(r[step], 10.0 * k as f64, "row {k}");
+        assert_eq!(r[dt], 2e-7);
+        assert!(r[err] < 1e-12, "row {k}: energy error {}", r[err]);
+    }
+    // The velocity field is about the centroid: the block's momentum is zero.
+    let (vx, vy) = (column(&header, "block.vx"), column(&header, "block.vy"));
+    for r in &rows {
+        assert!(r[vx].abs() < 1e-9 && r[vy].abs() < 1e-9, "{r:?}");
+    }
+
+    // summary.json: the documented keys.
+    let s = summary(&dir);
+    assert_eq!(s["status"], "completed");
+    assert_eq!(s["message"], "");
+    assert_eq!(s["backend"], "cpu");
+    assert!(!s["adapter"].as_str().unwrap().is_empty());
+    assert_eq!(s["steps"], 1000);
+    assert!(s["wall_seconds"].as_f64().unwrap() > 0.0);
+    assert!(s["element_cycles_per_second"].as_f64().unwrap() > 0.0);
+    assert_eq!(s["dt_min"].as_f64().unwrap(), 2e-7);
+    assert_eq!(s["dt_max"].as_f64().unwrap(), 2e-7);
+    let max_err = rows.iter().fold(0.0f64, |m, r| m.max(r[err]));
+    // (serde_json's default float parser may be 1 ulp off, hence the relative comparison.)
+    assert!(rel(s["max_energy_error"].as_f64().unwrap(), max_err, max_err) < 1e-15);
+
+    // Fields: a VTU per snapshot (every 2e-5 s, with t = 0 and the end) and the PVD.
+    for k in 0..=10 {
+        assert!(
+            dir.join(format!("fields/block_{k:05}.vtu")).is_file(),
+            "snapshot {k}"
+        );
+    }
+    assert!(!dir.join("fields/block_00011.vtu").exists());
+    assert_eq!(s["snapshots"], 11);
+    let pvd = std::fs::read_to_string(dir.join("fields.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet ").count(), 11);
+    check_vtu_with_meshio(&dir, 11, 231, 200, [0.0, 0.0, 0.1, 0.05]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Runs `tests/read_vtu.py` on `dir`. Without meshio (or python3), the check is skipped with a
+/// notice, except under CI (env var `CI` set), where it fails.
+fn check_vtu_with_meshio(dir: &Path, files: usize, points: u64, cells: u64, bbox: [f64; 4]) {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/read_vtu.py");
+    let out = Command::new("python3").arg(&script).arg(dir).output();
+    let skip = |why: String| {
+        if std::env::var_os("CI").is_some() {
+            panic!("CI is set, so the VTU files must be read with meshio: {why}");
+        }
+        eprintln!(
+            "SKIPPED: VTU check with meshio: {why} (install it: python3 -m pip install meshio)"
+        );
+    };
+    let out = match out {
+        Ok(o) => o,
+        Err(e) => return skip(format!("cannot run python3: {e}")),
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if out.status.code() == Some(77) {
+        return skip(stderr.trim().to_string());
+    }
+    assert_eq!(out.status.code(), Some(0), "read_vtu.py failed:\n{stderr}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    let pvd = &lines[0];
+    assert_eq!(pvd["pvd"], files as u64, "{pvd}");
+    assert_eq!(pvd["missing"].as_array().unwrap().len(), 0, "{pvd}");
+    let times: Vec<f64> = pvd["times"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t.as_f64().unwrap())
+        .collect();
+    assert!(times.windows(2).all(|w| w[1] > w[0]), "times {times:?}");
+    assert_eq!(lines.len(), files + 1, "{stdout}");
+    for v in &lines[1..] {
+        assert_eq!(v["points"], points, "{v}");
+        assert_eq!(v["cells"], cells, "{v}");
+        assert_eq!(v["cell_types"], serde_json::json!(["quad"]), "{v}");
+        for (name, n) in [("displacement", 3), ("velocity", 3)] {
+            assert_eq!(v["point_data"][name], n, "{v}");
+        }
+        for (name, n) in [("stress", 4), ("von_mises", 1), ("equivalent_strain", 1)] {
+            assert_eq!(v["cell_data"][name], n, "{v}");
+        }
+        // Deformed points minus displacement give back the reference mesh.
+        let b: Vec<f64> = v["reference_bbox"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        for k in 0..4 {
+            assert!((b[k] - bbox[k]).abs() < 1e-12, "{v}");
+        }
+        assert!(v["von_mises_mismatch"].as_f64().unwrap() < 1e-12, "{v}");
+        assert_eq!(v["max_abs_z"].as_f64().unwrap(), 0.0, "{v}");
+    }
+    println!("meshio read {files} VTU files ({points} points, {cells} quads each)");
+}
+
+#[test]
+fn end_time_override_and_check() {
+    let dir = tmp_dir("outputs-override");
+    let scene = asset("vibrating_block.toml");
+    let o = run_bin(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--end-time",
+        "2e-5",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(summary(&dir)["steps"], 100);
+    let _ = std::fs::remove_dir_all(&dir);
+
+    let o = run_bin(&["check", scene.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{stdout}");
+    for needle in [
+        "231 nodes",
+        "200 elements",
+        "1 bodies",
+        "stable 6.97",
+        "step 2.0000e-7 s",
+        "element_forces -> hourglass_stiffness -> node_update -> history -> fields",
+    ] {
+        assert!(
+            stdout.contains(needle),
+            "`check` output lacks {needle:?}:\n{stdout}"
+        );
+    }
+    // The estimated step count: 2e-4 / 2e-7 = 1000 (the floating-point quotient rounds up,
+    // so accept 1001 too).
+    let steps: u64 = stdout
+        .split("about ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no step estimate in:\n{stdout}"));
+    assert!((1000..=1001).contains(&steps), "{steps} steps estimated");
+}
+
+#[test]
+fn plan_has_only_the_stages_a_scene_needs() {
+    let plan = |name: &str| {
+        let scene = Scene::load(&asset(name)).unwrap();
+        let model = Model::build(&scene).unwrap();
+        Plan::new(&scene, &model).stages
+    };
+    use Stage::*;
+    // Fixed step, stiffness hourglass, no bulk viscosity, no boundaries.
+    assert_eq!(
+        plan("vibrating_block.toml"),
+        vec![
+            ElementForces,
+            HourglassStiffness,
+            NodeUpdate,
+            History,
+            Fields
+        ]
+    );
+    // Default viscous hourglass and bulk viscosity, variable step.
+    assert_eq!(
+        plan("spinning_disk.toml"),
+        vec![
+            ElementForces,
+            HourglassViscous,
+            BulkViscosity,
+            StableStep,
+            NodeUpdate,
+            History,
+            Fields
+        ]
+    );
+    // A boundary adds its pass; no hourglass control adds none.
+    let (_, _, p) = build(
+        r#"
+[run]
+end_time = 1.0e-5
+bulk_viscosity = { linear = 0.0, quadratic = 0.0 }
+[[material]]
+name = "steel"
+model = "linear_elastic"
+density = 7850.0
+youngs_modulus = 2.1e11
+poisson_ratio = 0.3
+[[body]]
+name = "b"
+material = "steel"
+mesh = { rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }
+hourglass = { form = "none" }
+[[boundary]]
+body = "b"
+region = { min = [-1.0, -1.0], max = [1.0e-9, 1.0] }
+velocity = { x = 0.0, y = 0.0 }
+"#,
+    );
+    assert_eq!(
+        p.stages,
+        vec![
+            ElementForces,
+            StableStep,
+            NodeUpdate,
+            VelocityBoundaries,
+            History
+        ]
+    );
+    assert_eq!(p.constrained_nodes, 3);
+}
+
+#[test]
+fn every_example_scene_runs() {
+    for name in ["vibrating_block.toml", "spinning_disk.toml", "rods.toml"] {
+        let dir = tmp_dir(&format!("asset-{name}"));
+        let o = run_bin(&[
+            "run",
+            asset(name).to_str().unwrap(),
+            "--backend",
+            "cpu",
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let s = summary(&dir);
+        assert_eq!(s["status"], "completed", "{name}");
+        println!(
+            "{name}: {} steps, max energy error {:.2e}",
+            s["steps"],
+            s["max_energy_error"].as_f64().unwrap()
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+/// A block scene with extra `[run]` lines and body lines.
+fn block_scene(run_extra: &str, model: &str, body_extra: &str) -> String {
+    format!(
+        r#"
+[run]
+end_time = 2.0e-4
+{run_extra}
+
+[[material]]
+name = "steel"
+model = "{model}"
+density = 7850.0
+youngs_modulus = 2.1e11
+poisson_ratio = 0.3
+
+[[body]]
+name = "block"
+material = "steel"
+mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [0.1, 0.05], cells = [20, 10] }} }}
+{body_extra}
+"#
+    )
+}
+
+/// Runs a scene that must fail; returns (summary message, stderr).
+fn expect_failed_run(case: &str, text: &str) -> (String, String) {
+    let dir = tmp_dir(&format!("unstable-{case}"));
+    let file = dir.join(format!("{case}.toml"));
+    std::fs::write(&file, text).unwrap();
+    let out = dir.join("out");
+    let o = run_bin(&[
+        "run",
+        file.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(3), "{case}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{case}: {stderr}");
+    let s = summary(&out);
+    assert_eq!(s["status"], "failed", "{case}");
+    let message = s["message"].as_str().unwrap().to_string();
+    assert!(
+        stderr.contains(&message),
+        "{case}: stderr lacks the message: {stderr}"
+    );
+    // The history written up to the failure is kept, with its header.
+    let (header, rows) = read_csv(&out.join("history.csv"));
+    assert_eq!(header[0], "time");
+    assert!(!rows.is_empty());
+    // The message names the step and the time.
+    assert!(
+        message.starts_with("step ") && message.contains(", t = "),
+        "{case}: {message}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    (message, stderr)
+}
+
+#[test]
+fn unstable_time_step_fails_naming_the_element() {
+    // 1.5 x the stable step: the highest modes grow exponentially until an element inverts
+    // (the energy-error stop is disabled so that the element check speaks).
+    let (m, _) = expect_failed_run(
+        "scale",
+        &block_scene(
+            "time_step_scale = 1.5\nenergy_error_limit = 1e30",
+            "linear_elastic",
+            "velocity_gradient = [[100.0, 20.0], [0.0, -60.0]]",
+        ),
+    );
+    assert!(
+        (m.contains("element ") && m.contains("body \"block\"")) || m.contains("node "),
+        "{m}"
+    );
+    println!("unstable time step: {m}");
+}
+
+#[test]
+fn unstable_time_step_is_caught_by_the_energy_bound_by_default() {
+    let (m, _) = expect_failed_run(
+        "scale-energy",
+        &block_scene(
+            "time_step_scale = 1.5",
+            "linear_elastic",
+            "velocity_gradient = [[100.0, 20.0], [0.0, -60.0]]",
+        ),
+    );
+    assert!(
+        m.contains("energy balance error") && m.contains("run.energy_error_limit = 0.05"),
+        "{m}"
+    );
+    println!("energy bound: {m}");
+}
+
+#[test]
+fn crushing_velocity_inverts_an_element_and_fails_naming_it() {
+    // A velocity field that crushes the block by 20 % of its size per microsecond.
+    let (m, _) = expect_failed_run(
+        "crush",
+        &block_scene(
+            "energy_error_limit = 1e30",
+            "linear_elastic",
+            "velocity_gradient = [[-2.0e5, 0.0], [0.0, -2.0e5]]",
+        ),
+    );
+    assert!(m.contains("inverted") && m.contains("element "), "{m}");
+    println!("crushed: {m}");
+}
