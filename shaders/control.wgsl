@@ -14,6 +14,10 @@ const MAX_INSTANCES: u32 = 72u;
 @group(0) @binding(5) var<storage, read_write> history: array<f32>;
 @group(0) @binding(6) var<storage, read> times: array<vec2<u32>>;   // sample, then snapshot times (ticks)
 @group(0) @binding(7) var<storage, read_write> indirect: array<u32>;
+// Small models on CPU adapters reduce in this one workgroup (params.dt_groups == 0 and
+// params.sum_groups == 0): two dispatches fewer per step, where each dispatch costs more than the work.
+@group(0) @binding(8) var<storage, read> elem_dt: array<f32>;
+@group(0) @binding(9) var<storage, read> sample_src: array<vec4<f32>>;
 
 var<workgroup> sh_u: u32;
 var<workgroup> sh_dt: array<f32, RG>;
@@ -50,7 +54,15 @@ fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
     }
     var d = 3.0e38;
     var ix = NONE;
-    if (l < params.dt_groups) {
+    if (params.dt_groups == 0u) {
+        for (var j = l; j < params.n_elems; j += RG) {
+            let dj = elem_dt[j];
+            if (better(d, ix, dj, j)) {
+                d = dj;
+                ix = j;
+            }
+        }
+    } else if (l < params.dt_groups) {
         let p = dt_partial[l];
         d = bitcast<f32>(p.x);
         ix = p.y;
@@ -124,7 +136,11 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
         for (var r = 0u; r < params.n_instances; r++) {
             let inst = instances[r];
             var acc = vec4<f32>(0.0);
-            if (l < inst.groups) {
+            if (params.sum_groups == 0u) {
+                for (var j = l; j < inst.count; j += RG) {
+                    acc += sample_src[inst.start + j];
+                }
+            } else if (l < inst.groups) {
                 acc = sum_partial[inst.first_group + l];
             }
             sh_sum[l] = acc;

@@ -13,6 +13,9 @@ use super::kernels::Kernels;
 use super::layout::*;
 use super::{boundary, element, node, reduce};
 
+/// Nodes + elements + constraints up to which a CPU adapter reduces in one workgroup.
+pub const FUSED_LIMIT: usize = 1 << 14;
+
 /// Rows the history ring holds between readbacks.
 pub const ROW_CAPACITY: u32 = 4096;
 
@@ -239,7 +242,9 @@ impl GpuState {
         if nc > 0 {
             push(nn + ne, nc, 1.0);
         }
-        let sum_groups = first;
+        // Small models on CPU adapters: the control workgroup reduces directly (see control.wgsl).
+        let fused = kernels.features.reduce_group == 64 && nn + ne + nc <= FUSED_LIMIT;
+        let sum_groups = if fused { 0 } else { first };
 
         let has_fields = plan.has(Stage::Fields);
         let mut times = time_table(schedule.history_interval, schedule.end_time);
@@ -265,7 +270,7 @@ impl GpuState {
             n_snapshot_times,
             row_stride,
             row_capacity: ROW_CAPACITY,
-            dt_groups: reduce::groups(ne, rg),
+            dt_groups: if fused { 0 } else { reduce::groups(ne, rg) },
             n_instances: instances.len() as u32,
             sum_groups,
             ticks_per_second: (TICKS_PER_END / schedule.end_time) as f32,
@@ -323,9 +328,9 @@ impl GpuState {
         let cons_buf =
             (nc > 0).then(|| a.init("constraints", bytemuck::cast_slice(&cons), storage));
         let sample_src = a.zeroed("sample_sources", 16 * (nn + ne + nc) as u64, storage);
-        let dt_partial = a.zeroed("dt_partials", 8 * params.dt_groups as u64, storage);
+        let dt_partial = a.zeroed("dt_partials", 8 * reduce::groups(ne, rg) as u64, storage);
         let instances_buf = a.init("instances", bytemuck::cast_slice(&instances), storage);
-        let sum_partial = a.zeroed("sum_partials", 16 * sum_groups as u64, storage);
+        let sum_partial = a.zeroed("sum_partials", 16 * first as u64, storage);
         let history = a.zeroed(
             "history",
             4 * (ROW_CAPACITY * row_stride) as u64,
@@ -379,7 +384,12 @@ impl GpuState {
                 device,
                 "control_dt",
                 &kernels.control_dt,
-                &[(0, &params_buf), (1, &ctrl), (2, &dt_partial)],
+                &[
+                    (0, &params_buf),
+                    (1, &ctrl),
+                    (2, &dt_partial),
+                    (8, &elem_dt),
+                ],
             ),
             node: bind(device, "node", &kernels.node, &nd),
             boundary: match (&kernels.boundary, &cons_buf) {
@@ -421,6 +431,7 @@ impl GpuState {
                     (5, &history),
                     (6, &times_buf),
                     (7, &indirect),
+                    (9, &sample_src),
                 ],
             ),
         };
@@ -450,9 +461,11 @@ impl GpuState {
         pass.set_pipeline(&kernels.element);
         pass.set_bind_group(0, &b.element, &[]);
         pass.dispatch_workgroups(self.groups.element, 1, 1);
-        pass.set_pipeline(&kernels.min_dt);
-        pass.set_bind_group(0, &b.min_dt, &[]);
-        pass.dispatch_workgroups(self.params.dt_groups, 1, 1);
+        if self.params.dt_groups > 0 {
+            pass.set_pipeline(&kernels.min_dt);
+            pass.set_bind_group(0, &b.min_dt, &[]);
+            pass.dispatch_workgroups(self.params.dt_groups, 1, 1);
+        }
         pass.set_pipeline(&kernels.control_dt);
         pass.set_bind_group(0, &b.control_dt, &[]);
         pass.dispatch_workgroups(1, 1, 1);
@@ -464,9 +477,11 @@ impl GpuState {
             pass.set_bind_group(0, bg, &[]);
             pass.dispatch_workgroups(self.groups.boundary, 1, 1);
         }
-        pass.set_pipeline(&kernels.sum);
-        pass.set_bind_group(0, &b.sum, &[]);
-        pass.dispatch_workgroups_indirect(&self.indirect, 0);
+        if self.params.sum_groups > 0 {
+            pass.set_pipeline(&kernels.sum);
+            pass.set_bind_group(0, &b.sum, &[]);
+            pass.dispatch_workgroups_indirect(&self.indirect, 0);
+        }
         pass.set_pipeline(&kernels.control_end);
         pass.set_bind_group(0, &b.control_end, &[]);
         pass.dispatch_workgroups(1, 1, 1);
@@ -489,9 +504,11 @@ impl GpuState {
     /// Records only the stable-step reduction and control (for stage timing).
     pub fn record_control(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
         let b = &self.bind;
-        pass.set_pipeline(&kernels.min_dt);
-        pass.set_bind_group(0, &b.min_dt, &[]);
-        pass.dispatch_workgroups(self.params.dt_groups, 1, 1);
+        if self.params.dt_groups > 0 {
+            pass.set_pipeline(&kernels.min_dt);
+            pass.set_bind_group(0, &b.min_dt, &[]);
+            pass.dispatch_workgroups(self.params.dt_groups, 1, 1);
+        }
         pass.set_pipeline(&kernels.control_dt);
         pass.set_bind_group(0, &b.control_dt, &[]);
         pass.dispatch_workgroups(1, 1, 1);
