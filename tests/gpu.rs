@@ -185,6 +185,7 @@ fn both(
     ctx: Arc<GpuContext>,
     text: &str,
     name: &str,
+    fused: Option<bool>,
 ) -> (
     Vec<ricochet::step::Sample>,
     Vec<ricochet::step::Sample>,
@@ -198,7 +199,8 @@ fn both(
     let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
     let rc = run(&scene, &model, &plan, &mut cpu, &dir.join("cpu"), None).expect("cpu run");
     assert_eq!(rc.summary.status, "completed", "{}", rc.summary.message);
-    let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
+    let mut gpu = GpuSolver::with_reductions(ctx, &model, &plan, schedule(&scene), fused)
+        .expect("gpu solver");
     let rg = run(&scene, &model, &plan, &mut gpu, &dir.join("gpu"), None).expect("gpu run");
     assert_eq!(rg.summary.status, "completed", "{}", rg.summary.message);
     let (ug, _) = gpu.nodes().expect("nodes");
@@ -214,9 +216,13 @@ fn both(
 }
 
 fn parity(name: &str, text: &str) {
+    parity_with(name, text, None);
+}
+
+fn parity_with(name: &str, text: &str, fused: Option<bool>) {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let (sc, sg, uc, ug, nc, ng) = both(ctx, text, name);
+    let (sc, sg, uc, ug, nc, ng) = both(ctx, text, name, fused);
     assert!(nc.abs_diff(ng) <= 1, "{name}: {nc} and {ng} steps");
     assert_eq!(sc.len(), sg.len(), "{name}: same number of history rows");
     let umax = uc.iter().map(|u| u[0].hypot(u[1])).fold(0.0f64, f64::max);
@@ -294,6 +300,24 @@ fn parity_mixed_materials_with_boundaries() {
     s.push_str("\n[[boundary]]\nbody = \"b0\"\nregion = { min = [-1.0, -1.0], max = [0.0001, 1.0] }\nvelocity = { x = 2.0, y = 0.0 }\n");
     s.push_str("\n[[boundary]]\nbody = \"b3\"\nregion = { min = [-1.0, -1.0], max = [1.0, 0.0001] }\nvelocity = { y = -1.0 }\n");
     parity("mixed", &s);
+}
+
+#[test]
+fn parity_with_the_multi_level_reductions() {
+    // The path GPUs take (and CPU adapters for large models): first-level reduction kernels, then
+    // the control workgroup; with boundaries, so that every sum instance is exercised.
+    let mut s = mixed_scene();
+    s = s.replace(
+        "end_time = 1.0e-4",
+        "end_time = 2.0e-5\nhistory_interval = 1.0e-6",
+    );
+    s.push_str("\n[[boundary]]\nbody = \"b0\"\nregion = { min = [-1.0, -1.0], max = [0.0001, 1.0] }\nvelocity = { x = 2.0, y = 0.0 }\n");
+    parity_with("mixed_multi_level", &s, Some(false));
+    parity_with(
+        "vibrating_block_multi_level",
+        &asset("vibrating_block.toml"),
+        Some(false),
+    );
 }
 
 #[test]

@@ -78,6 +78,21 @@ impl GpuSolver {
         plan: &Plan,
         schedule: Schedule,
     ) -> Result<Self> {
+        Self::with_reductions(ctx, model, plan, schedule, None)
+    }
+
+    /// As [`GpuSolver::new`], choosing whether the control workgroup reduces directly (`Some(true)`)
+    /// or after the first-level reduction kernels (`Some(false)`); `None` decides by adapter and size.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the model does not fit.
+    pub fn with_reductions(
+        ctx: Arc<GpuContext>,
+        model: &Model,
+        plan: &Plan,
+        schedule: Schedule,
+        fused: Option<bool>,
+    ) -> Result<Self> {
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -90,7 +105,7 @@ impl GpuSolver {
         let device = &ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let kernels = Kernels::new(device, features, plan.has(Stage::VelocityBoundaries));
-        let state = GpuState::new(device, &kernels, model, plan, &schedule);
+        let state = GpuState::new(device, &kernels, model, plan, &schedule, fused);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
                 "kernel or buffer setup rejected by {}: {e}",

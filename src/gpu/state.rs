@@ -118,7 +118,8 @@ fn time_table(interval: f64, end: f64) -> Vec<[u32; 2]> {
 }
 
 impl GpuState {
-    /// Uploads a model at t = 0.
+    /// Uploads a model at t = 0. `fused`: whether the control workgroup reduces directly (see
+    /// control.wgsl); `None` decides by adapter and size.
     ///
     /// # Errors
     /// [`Error::Gpu`] when the model exceeds what one dispatch can cover or has too many bodies.
@@ -128,6 +129,7 @@ impl GpuState {
         model: &Model,
         plan: &Plan,
         schedule: &Schedule,
+        fused: Option<bool>,
     ) -> Result<GpuState> {
         let nn = model.node_count();
         let ne = model.element_count();
@@ -243,7 +245,8 @@ impl GpuState {
             push(nn + ne, nc, 1.0);
         }
         // Small models on CPU adapters: the control workgroup reduces directly (see control.wgsl).
-        let fused = kernels.features.reduce_group == 64 && nn + ne + nc <= FUSED_LIMIT;
+        let fused =
+            fused.unwrap_or(kernels.features.reduce_group == 64 && nn + ne + nc <= FUSED_LIMIT);
         let sum_groups = if fused { 0 } else { first };
 
         let has_fields = plan.has(Stage::Fields);
