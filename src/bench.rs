@@ -13,6 +13,7 @@ use crate::model::Model;
 use crate::plan::Plan;
 use crate::scene::Scene;
 use crate::step::cpu::CpuSolver;
+use crate::step::Solver;
 
 /// One row of the bench table.
 #[derive(Debug, Clone, Serialize)]
@@ -78,6 +79,13 @@ pub fn cpu(cells: usize, steps: u64) -> Result<BenchRow> {
     let t0 = Instant::now();
     solver.run_steps(steps);
     let wall = t0.elapsed().as_secs_f64();
+    if solver.steps() != steps + 2 {
+        return Err(crate::error::Error::Bench(format!(
+            "the CPU run stopped after {} of {} steps",
+            solver.steps(),
+            steps + 2
+        )));
+    }
     Ok(row(
         "cpu",
         solver_adapter(),

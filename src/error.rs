@@ -41,6 +41,9 @@ pub enum Error {
         /// The cause.
         source: std::io::Error,
     },
+    /// A benchmark run did not take the steps it was asked to (the scene stopped early).
+    #[error("bench: {0}")]
+    Bench(String),
     /// The GPU backend could not be used.
     #[error("GPU: {0}")]
     Gpu(String),

@@ -140,6 +140,12 @@ pub struct QuadGeometry {
     pub by: [f64; 4],
     /// Flanagan-Belytschko hourglass vector gamma_a.
     pub gamma: [f64; 4],
+    /// 1 / area.
+    pub inv_area: f64,
+    /// (b . b) / (gamma . gamma): geometry factor of the stiffness hourglass coefficient.
+    pub hourglass_stiffness: f64,
+    /// sqrt(b . b) / (gamma . gamma): geometry factor of the viscous hourglass coefficient.
+    pub hourglass_viscous: f64,
 }
 
 /// Centre gradients and hourglass vector of the quad with corners `x` (counter-clockwise).
@@ -160,8 +166,13 @@ pub fn quad_geometry(x: &[[f64; 2]; 4]) -> QuadGeometry {
         h[2] - hx * bx[2] - hy * by[2],
         h[3] - hx * bx[3] - hy * by[3],
     ];
+    let bb: f64 = (0..4).map(|a| bx[a] * bx[a] + by[a] * by[a]).sum();
+    let gg: f64 = gamma.iter().map(|x| x * x).sum();
     QuadGeometry {
         area,
+        inv_area: 1.0 / area,
+        hourglass_stiffness: bb / gg,
+        hourglass_viscous: bb.sqrt() / gg,
         bx,
         by,
         gamma,
@@ -180,6 +191,19 @@ pub fn characteristic_length(x: &[[f64; 2]; 4], area: f64) -> f64 {
     let side = d(0, 1).max(d(1, 2)).max(d(2, 3)).max(d(3, 0));
     let diag = 0.5 * d(0, 2).max(d(1, 3));
     area / side.max(diag).sqrt()
+}
+
+/// Smallest corner cross product of `x` (twice the area of the corner's triangle).
+#[inline]
+pub fn min_corner_cross(x: &[[f64; 2]; 4]) -> f64 {
+    let mut m = f64::INFINITY;
+    for a in 0..4 {
+        let p = x[(a + 3) % 4];
+        let c = x[a];
+        let n = x[(a + 1) % 4];
+        m = m.min((n[0] - c[0]) * (p[1] - c[1]) - (n[1] - c[1]) * (p[0] - c[0]));
+    }
+    m
 }
 
 /// Smallest corner Jacobian of `x`, relative to the quad's area (1 for a parallelogram).
@@ -221,7 +245,7 @@ pub fn evaluate(
 
 /// [`evaluate`] with the reference geometry `g` of `dx` computed ahead (the solver keeps it per
 /// element, since it never changes).
-#[inline]
+#[inline(always)]
 pub fn evaluate_with(
     p: &ElementParams,
     g: &QuadGeometry,
@@ -253,10 +277,10 @@ pub fn evaluate_with(
     let x: [[f64; 2]; 4] = std::array::from_fn(|a| [dx[a][0] + u[a][0], dx[a][1] + u[a][1]]);
     let area = 0.5
         * ((x[2][0] - x[0][0]) * (x[3][1] - x[1][1]) - (x[3][0] - x[1][0]) * (x[2][1] - x[0][1]));
-    let min_corner = min_corner_ratio(&x, g.area);
+    let min_corner = min_corner_cross(&x) * g.inv_area;
     let length = characteristic_length(&x, area.abs());
-    let rho = p.density * g.area / area.abs().max(f64::MIN_POSITIVE);
-    let c = (p.wave_modulus / rho).sqrt();
+    // Wave speed with the current density rho0 A0 / A.
+    let c = (p.reference_speed * p.reference_speed * area.abs() * g.inv_area).sqrt();
 
     let mut force = [[0.0; 2]; 4];
     for a in 0..4 {
@@ -265,15 +289,16 @@ pub fn evaluate_with(
     }
 
     // Hourglass control (Flanagan-Belytschko), on the reference gamma.
-    let bb: f64 = (0..4).map(|a| g.bx[a] * g.bx[a] + g.by[a] * g.by[a]).sum();
-    let gg: f64 = g.gamma.iter().map(|x| x * x).sum();
     let mut hourglass_stored = 0.0;
     let mut hourglass_q = [0.0; 2];
     let mut hourglass_work = 0.0;
     match p.hourglass {
         HourglassForm::None => {}
         HourglassForm::Stiffness => {
-            let k = p.hourglass_coefficient * (p.lambda_plane + 2.0 * p.mu) * a0t * bb / gg;
+            let k = p.hourglass_coefficient
+                * (p.lambda_plane + 2.0 * p.mu)
+                * a0t
+                * g.hourglass_stiffness;
             let mut q = [0.0; 2];
             for a in 0..4 {
                 q[0] += g.gamma[a] * u[a][0];
@@ -287,7 +312,7 @@ pub fn evaluate_with(
         }
         HourglassForm::Viscous => {
             let c0 = p.reference_speed;
-            let damp = p.hourglass_coefficient * p.density * c0 * a0t * bb.sqrt() / gg;
+            let damp = p.hourglass_coefficient * p.density * c0 * a0t * g.hourglass_viscous;
             let mut qd = [0.0; 2];
             for a in 0..4 {
                 qd[0] += g.gamma[a] * v[a][0];
@@ -321,6 +346,7 @@ pub fn evaluate_with(
         // Compression only, and not for round-off rates (rigid motion): the strain rate over one
         // wave transit of the element must exceed 1e-9.
         if rate * length < -1e-9 * c {
+            let rho = p.density * g.area / area.abs().max(f64::MIN_POSITIVE);
             let q =
                 rho * length * (p.bulk_quadratic * length * rate * rate - p.bulk_linear * c * rate);
             bulk_p = match p.model {
@@ -364,7 +390,7 @@ pub fn evaluate_with(
 
 /// First Piola-Kirchhoff stress (xx xy yx yy), strain energy per reference volume, and the Cauchy
 /// stress (xx yy xy zz) for the deformation gradient `f` with determinant `j`.
-#[inline]
+#[inline(always)]
 pub fn stress(p: &ElementParams, f: &[f64; 4], j: f64) -> ([f64; 4], f64, [f64; 4]) {
     match p.model {
         MaterialModel::LinearElastic => {
