@@ -303,6 +303,49 @@ fn parity_mixed_materials_with_boundaries() {
 }
 
 #[test]
+fn parity_step_pulse_rod_of_the_wave_tests() {
+    // The core step-pulse test's scene (tests/core/wave.rs): a plane-stress rod of 200 cells
+    // moving at 5 m/s, stopped at x = 0 by a velocity boundary, fixed step at Courant 0.9, no bulk
+    // viscosity, viscous hourglass control.
+    let (h, cells, c_number) = (1.0e-3, 200usize, 0.9);
+    let dt = c_number * h / (2.1e11f64 / 7850.0).sqrt();
+    let s = format!(
+        "[run]\nend_time = {end:e}\ntime_step = {dt:e}\nhistory_interval = {hi:e}\n\
+         bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}\n\n\
+         [[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\ndensity = 7850.0\n\
+         youngs_modulus = 2.1e11\npoisson_ratio = 0.0\n\n\
+         [[body]]\nname = \"rod\"\nmaterial = \"steel\"\nformulation = \"plane_stress\"\nthickness = 0.01\n\
+         mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [{len}, {h}], cells = [{cells}, 1] }} }}\n\
+         hourglass = {{ form = \"viscous\", coefficient = 0.1 }}\ninitial_velocity = [5.0, 0.0]\n\n\
+         [[boundary]]\nbody = \"rod\"\nregion = {{ min = [-1.0e-9, -1.0], max = [1.0e-9, 1.0] }}\n\
+         velocity = {{ x = 0.0 }}\n",
+        end = dt * 150.0,
+        hi = dt * 10.0,
+        len = h * cells as f64,
+    );
+    parity("step_pulse", &s);
+}
+
+#[test]
+fn parity_dissipative_block_with_variable_step_of_the_energy_tests() {
+    // The core energy test's dissipative case (tests/core/energy.rs): the vibrating block with
+    // viscous hourglass control, default bulk viscosity and the variable stable step.
+    let s = asset("vibrating_block.toml")
+        .replace("time_step = 2.0e-7\n", "")
+        .replace("bulk_viscosity = { linear = 0.0, quadratic = 0.0 }\n", "")
+        .replace("form = \"stiffness\"", "form = \"viscous\"");
+    let scene = ricochet::scene::Scene::parse(&s, std::path::Path::new("vibrating_block.toml"))
+        .expect("edited asset parses");
+    assert!(scene.run.time_step.is_none(), "variable step");
+    assert!(scene.run.bulk_linear > 0.0, "default bulk viscosity");
+    assert_eq!(
+        scene.bodies[0].hourglass.form,
+        ricochet::scene::HourglassForm::Viscous
+    );
+    parity("dissipative_variable_step", &s);
+}
+
+#[test]
 fn parity_with_the_multi_level_reductions() {
     // The path GPUs take (and CPU adapters for large models): first-level reduction kernels, then
     // the control workgroup; with boundaries, so that every sum instance is exercised.
