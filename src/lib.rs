@@ -12,6 +12,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod bench;
+pub mod contact;
 pub mod error;
 pub mod gpu;
 pub mod mesh;

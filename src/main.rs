@@ -202,6 +202,12 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             };
             let mut solver: Box<dyn Solver> = match backend {
                 Backend::Cpu => cpu(),
+                Backend::Auto if plan.has(ricochet::plan::Stage::Contact) => {
+                    eprintln!(
+                        "notice: contact runs on the CPU backend only for now; running on the CPU"
+                    );
+                    cpu()
+                }
                 Backend::Auto => match GpuContext::new(adapter.as_deref()) {
                     Ok(ctx) => Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?),
                     Err(e) => {

@@ -55,6 +55,10 @@ pub struct Model {
     pub bodies: Vec<BodyModel>,
     /// Velocity constraints, sorted by node.
     pub constraints: Vec<NodeConstraint>,
+    /// Contacts between bodies (as in the scene).
+    pub contacts: Vec<scene::Contact>,
+    /// Rigid walls (as in the scene).
+    pub walls: Vec<scene::RigidWall>,
 }
 
 impl Model {
@@ -74,6 +78,8 @@ impl Model {
             element_body: Vec::new(),
             bodies: Vec::new(),
             constraints: Vec::new(),
+            contacts: scene.contacts.clone(),
+            walls: scene.walls.clone(),
         };
         for (bi, body) in scene.bodies.iter().enumerate() {
             let mesh = Mesh::generate(&body.mesh);
@@ -203,6 +209,11 @@ impl Model {
     /// Number of elements.
     pub fn element_count(&self) -> usize {
         self.quads.len()
+    }
+
+    /// Whether the model has any contact or rigid wall.
+    pub fn has_contact(&self) -> bool {
+        !self.contacts.is_empty() || !self.walls.is_empty()
     }
 
     /// Parameters of element `e`.

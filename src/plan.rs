@@ -22,6 +22,8 @@ pub enum Stage {
     NodeUpdate,
     /// Prescribed velocities.
     VelocityBoundaries,
+    /// Broad phase (when due), narrow phase and contact correction.
+    Contact,
     /// Energy audit and body velocities at history times.
     History,
     /// Field snapshots at field times.
@@ -39,6 +41,7 @@ impl Stage {
             Stage::StableStep => "stable_step",
             Stage::NodeUpdate => "node_update",
             Stage::VelocityBoundaries => "velocity_boundaries",
+            Stage::Contact => "contact",
             Stage::History => "history",
             Stage::Fields => "fields",
         }
@@ -60,6 +63,10 @@ pub struct Plan {
     pub stiffness_hourglass_elements: usize,
     /// Constrained nodes.
     pub constrained_nodes: usize,
+    /// Contacts between bodies.
+    pub contacts: usize,
+    /// Rigid walls.
+    pub walls: usize,
 }
 
 impl Plan {
@@ -92,6 +99,9 @@ impl Plan {
         if !model.constraints.is_empty() {
             stages.push(Stage::VelocityBoundaries);
         }
+        if model.has_contact() {
+            stages.push(Stage::Contact);
+        }
         stages.push(Stage::History);
         if scene.run.field_interval.is_some() {
             stages.push(Stage::Fields);
@@ -103,6 +113,8 @@ impl Plan {
             viscous_hourglass_elements: viscous,
             stiffness_hourglass_elements: stiffness,
             constrained_nodes: model.constraints.len(),
+            contacts: model.contacts.len(),
+            walls: model.walls.len(),
         }
     }
 

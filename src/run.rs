@@ -55,7 +55,13 @@ pub fn run(
 ) -> Result<RunResult> {
     create_dir(out_dir)?;
     let bodies: Vec<String> = model.bodies.iter().map(|b| b.name.clone()).collect();
-    let mut history = HistoryWriter::create(&out_dir.join("history.csv"), &bodies)?;
+    let contacts: Vec<String> = model
+        .contacts
+        .iter()
+        .map(|c| c.name.clone())
+        .chain(model.walls.iter().map(|w| w.name.clone()))
+        .collect();
+    let mut history = HistoryWriter::create(&out_dir.join("history.csv"), &bodies, &contacts)?;
     let mut fields = match scene.run.field_interval {
         Some(_) => Some(FieldWriter::new(out_dir)?),
         None => None,
@@ -79,9 +85,9 @@ pub fn run(
                     if err > scene.run.energy_error_limit {
                         failure = Some(format!(
                             "step {}, t = {:e} s: energy balance error {:.3e} exceeds run.energy_error_limit = {} \
-                             (kinetic {:e}, internal {:e}, hourglass {:e}, viscous {:e}, external {:e})",
+                             (kinetic {:e}, internal {:e}, hourglass {:e}, viscous {:e}, contact {:e}, external {:e})",
                             s.step, s.time, err, scene.run.energy_error_limit, s.kinetic, s.internal,
-                            s.hourglass, s.viscous, s.external
+                            s.hourglass, s.viscous, s.contact, s.external
                         ));
                         samples.push((s, err));
                         break 'outer;

@@ -33,6 +33,31 @@ struct RawScene {
     body: Vec<RawBody>,
     #[serde(default)]
     boundary: Vec<RawBoundary>,
+    #[serde(default)]
+    contact: Vec<RawContact>,
+    #[serde(default)]
+    rigid_wall: Vec<RawWall>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawContact {
+    bodies: Vec<String>,
+    name: Option<String>,
+    method: Option<String>,
+    two_pass: Option<bool>,
+    penalty_scale: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawWall {
+    point: [f64; 2],
+    normal: [f64; 2],
+    name: Option<String>,
+    bodies: Option<Vec<String>>,
+    method: Option<String>,
+    penalty_scale: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -259,6 +284,51 @@ pub struct Boundary {
     pub key: String,
 }
 
+/// How a contact constraint is enforced.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactMethod {
+    /// Lagrange multipliers with the diagonal mass: the gap is closed exactly in the step
+    /// (perfectly plastic impact of the contacting nodes, momentum conserved).
+    Lagrange,
+    /// Penalty springs p = k g, bounded by the perfectly plastic impulse; they shorten the stable step.
+    Penalty,
+}
+
+/// Default penalty scale `s` in k = s K t L^2 / A.
+pub const DEFAULT_PENALTY_SCALE: f64 = 0.1;
+
+/// Node-to-segment contact between two bodies.
+#[derive(Debug, Clone)]
+pub struct Contact {
+    /// Name used in history columns (`<a>-<b>` unless given).
+    pub name: String,
+    /// The first body (slave nodes of the first pass) and the second (its master segments).
+    pub bodies: [usize; 2],
+    /// Enforcement.
+    pub method: ContactMethod,
+    /// Also the reverse pass (second body's nodes against the first body's segments).
+    pub two_pass: bool,
+    /// Penalty scale `s` (penalty only).
+    pub penalty_scale: f64,
+}
+
+/// A fixed planar rigid wall.
+#[derive(Debug, Clone)]
+pub struct RigidWall {
+    /// Name used in history columns.
+    pub name: String,
+    /// A point of the wall.
+    pub point: [f64; 2],
+    /// Unit normal pointing to the side the bodies stay on.
+    pub normal: [f64; 2],
+    /// Bodies the wall acts on.
+    pub bodies: Vec<usize>,
+    /// Enforcement.
+    pub method: ContactMethod,
+    /// Penalty scale `s` (penalty only).
+    pub penalty_scale: f64,
+}
+
 /// Run control, validated.
 #[derive(Debug, Clone)]
 pub struct RunSettings {
@@ -295,6 +365,17 @@ pub struct Scene {
     pub bodies: Vec<Body>,
     /// Velocity boundary conditions.
     pub boundaries: Vec<Boundary>,
+    /// Contacts between bodies.
+    pub contacts: Vec<Contact>,
+    /// Rigid walls.
+    pub walls: Vec<RigidWall>,
+}
+
+impl Scene {
+    /// Whether the scene has any contact or rigid wall.
+    pub fn has_contact(&self) -> bool {
+        !self.contacts.is_empty() || !self.walls.is_empty()
+    }
 }
 
 impl Scene {
@@ -401,6 +482,20 @@ impl Validator<'_> {
             let key = format!("boundary[{i}]");
             boundaries.push(self.boundary(&key, b, &bodies)?);
         }
+        let mut contacts: Vec<Contact> = Vec::new();
+        for (i, c) in raw.contact.iter().enumerate() {
+            let key = format!("contact[{i}]");
+            let c = self.contact(&key, c, &bodies)?;
+            self.unique_name(&key, &c.name, &contacts, &[])?;
+            contacts.push(c);
+        }
+        let mut walls: Vec<RigidWall> = Vec::new();
+        for (i, w) in raw.rigid_wall.iter().enumerate() {
+            let key = format!("rigid_wall[{i}]");
+            let w = self.wall(&key, w, &bodies)?;
+            self.unique_name(&key, &w.name, &contacts, &walls)?;
+            walls.push(w);
+        }
         let name = self
             .file
             .file_stem()
@@ -413,6 +508,153 @@ impl Validator<'_> {
             materials,
             bodies,
             boundaries,
+            contacts,
+            walls,
+        })
+    }
+
+    fn unique_name(
+        &self,
+        key: &str,
+        name: &str,
+        contacts: &[Contact],
+        walls: &[RigidWall],
+    ) -> Result<()> {
+        let taken = contacts.iter().any(|c| c.name == name) || walls.iter().any(|w| w.name == name);
+        if taken {
+            return Err(self.invalid(
+                format!("{key}.name"),
+                format!("{name:?}"),
+                "another contact or rigid wall has this name (give each a distinct `name`)",
+            ));
+        }
+        if name.is_empty() || name.contains([',', '"', '\n']) {
+            return Err(self.invalid(
+                format!("{key}.name"),
+                format!("{name:?}"),
+                "must be non-empty, without commas, quotes or newlines (it names history columns)",
+            ));
+        }
+        Ok(())
+    }
+
+    fn body_index(&self, key: &str, name: &str, bodies: &[Body]) -> Result<usize> {
+        bodies.iter().position(|b| b.name == name).ok_or_else(|| {
+            let known: Vec<&str> = bodies.iter().map(|b| b.name.as_str()).collect();
+            self.invalid(
+                key,
+                format!("{name:?}"),
+                &format!("no body of that name (defined: {known:?})"),
+            )
+        })
+    }
+
+    fn method(&self, key: &str, m: Option<&str>) -> Result<ContactMethod> {
+        match m {
+            None | Some("lagrange") => Ok(ContactMethod::Lagrange),
+            Some("penalty") => Ok(ContactMethod::Penalty),
+            Some(other) => Err(self.invalid(
+                key,
+                format!("{other:?}"),
+                "expected \"lagrange\" or \"penalty\"",
+            )),
+        }
+    }
+
+    fn penalty_scale(&self, key: &str, s: Option<f64>, method: ContactMethod) -> Result<f64> {
+        match s {
+            None => Ok(DEFAULT_PENALTY_SCALE),
+            Some(_) if method != ContactMethod::Penalty => Err(self.invalid(
+                key,
+                format!("{:?}", s.unwrap_or_default()),
+                "applies to method = \"penalty\" only",
+            )),
+            Some(x) => self.positive(key, x),
+        }
+    }
+
+    fn contact(&self, key: &str, c: &RawContact, bodies: &[Body]) -> Result<Contact> {
+        if c.bodies.len() != 2 {
+            return Err(self.invalid(
+                format!("{key}.bodies"),
+                format!("{:?}", c.bodies),
+                "give exactly two body names: [slave, master]",
+            ));
+        }
+        let a = self.body_index(&format!("{key}.bodies"), &c.bodies[0], bodies)?;
+        let b = self.body_index(&format!("{key}.bodies"), &c.bodies[1], bodies)?;
+        if a == b {
+            return Err(self.invalid(
+                format!("{key}.bodies"),
+                format!("{:?}", c.bodies),
+                "the two bodies must differ (self-contact is not supported)",
+            ));
+        }
+        let method = self.method(&format!("{key}.method"), c.method.as_deref())?;
+        let penalty_scale =
+            self.penalty_scale(&format!("{key}.penalty_scale"), c.penalty_scale, method)?;
+        Ok(Contact {
+            name: c
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("{}-{}", c.bodies[0], c.bodies[1])),
+            bodies: [a, b],
+            method,
+            two_pass: c.two_pass.unwrap_or(true),
+            penalty_scale,
+        })
+    }
+
+    fn wall(&self, key: &str, w: &RawWall, bodies: &[Body]) -> Result<RigidWall> {
+        for i in 0..2 {
+            self.finite(&format!("{key}.point"), w.point[i])?;
+            self.finite(&format!("{key}.normal"), w.normal[i])?;
+        }
+        let len = w.normal[0].hypot(w.normal[1]);
+        if len.is_nan() || len <= 0.0 {
+            return Err(self.invalid(
+                format!("{key}.normal"),
+                format!("{:?}", w.normal),
+                "must be a non-zero vector (pointing to the side the bodies stay on)",
+            ));
+        }
+        let list = match &w.bodies {
+            Some(names) => {
+                if names.is_empty() {
+                    return Err(self.invalid(
+                        format!("{key}.bodies"),
+                        "[]",
+                        "name at least one body",
+                    ));
+                }
+                let mut out = Vec::new();
+                for n in names {
+                    let i = self.body_index(&format!("{key}.bodies"), n, bodies)?;
+                    if !out.contains(&i) {
+                        out.push(i);
+                    }
+                }
+                out
+            }
+            None => (0..bodies.len()).collect(),
+        };
+        let method = self.method(&format!("{key}.method"), w.method.as_deref())?;
+        let penalty_scale =
+            self.penalty_scale(&format!("{key}.penalty_scale"), w.penalty_scale, method)?;
+        let name = match &w.name {
+            Some(n) => n.clone(),
+            None => {
+                let names: Vec<&str> = list.iter().map(|&i| bodies[i].name.as_str()).collect();
+                names.join("-")
+            }
+        };
+        Ok(RigidWall {
+            name,
+            point: w.point,
+            normal: [w.normal[0] / len, w.normal[1] / len],
+            bodies: list,
+            method,
+            penalty_scale,
         })
     }
 

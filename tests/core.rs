@@ -8,6 +8,8 @@
 //! - [`mass`]: lumped mass and momentum conservation;
 //! - [`wave`]: 1D waves in a rod strip against the dispersion table of `REFERENCES.md` section 2;
 //! - [`energy`]: the energy audit of a free-vibrating block (conservative and dissipative);
+//! - [`contact`]: rod impact (Lagrange, penalty, rigid wall, impedance mismatch), corner-first
+//!   square on a wall, the contact plan and history columns;
 //! - [`bad_input`]: every rejected scene exits with status 2 and names the file, key and value;
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs.
 
@@ -16,6 +18,8 @@ mod common;
 
 #[path = "core/bad_input.rs"]
 mod bad_input;
+#[path = "core/contact.rs"]
+mod contact;
 #[path = "core/energy.rs"]
 mod energy;
 #[path = "core/hourglass.rs"]

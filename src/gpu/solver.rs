@@ -93,6 +93,13 @@ impl GpuSolver {
         schedule: Schedule,
         fused: Option<bool>,
     ) -> Result<Self> {
+        if plan.has(Stage::Contact) {
+            return Err(Error::Gpu(
+                "contact and rigid walls run on the CPU backend only for now (`--backend cpu`); \
+                 the GPU contact kernels are not written yet"
+                    .to_string(),
+            ));
+        }
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -263,6 +270,8 @@ impl GpuSolver {
                 hourglass: w(6) as f64,
                 viscous: w(7) as f64,
                 external: w(8) as f64,
+                contact: 0.0,
+                contacts: Vec::new(),
                 body_velocity: (0..nb)
                     .map(|b| [w(9 + 2 * b) as f64, w(10 + 2 * b) as f64])
                     .collect(),

@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::step::Sample;
 
 /// Fixed leading columns of `history.csv`.
-pub const COLUMNS: [&str; 9] = [
+pub const COLUMNS: [&str; 10] = [
     "time",
     "step",
     "dt",
@@ -16,6 +16,7 @@ pub const COLUMNS: [&str; 9] = [
     "internal_energy",
     "hourglass_energy",
     "viscous_work",
+    "contact_energy",
     "external_work",
     "energy_error",
 ];
@@ -30,16 +31,17 @@ pub struct EnergyAudit {
 }
 
 impl EnergyAudit {
-    /// Total energy of a sample: kinetic + internal + hourglass + viscous work - external work.
+    /// Total energy of a sample: kinetic + internal + hourglass + viscous work + contact energy
+    /// - external work.
     pub fn total(s: &Sample) -> f64 {
-        s.kinetic + s.internal + s.hourglass + s.viscous - s.external
+        s.kinetic + s.internal + s.hourglass + s.viscous + s.contact - s.external
     }
 
     /// The balance error of `s` relative to the largest energy seen so far (this sample included).
     pub fn error(&mut self, s: &Sample) -> f64 {
         let total = Self::total(s);
         let e0 = *self.initial.get_or_insert(total);
-        let stored = s.kinetic + s.internal + s.hourglass + s.viscous;
+        let stored = s.kinetic + s.internal + s.hourglass + s.viscous + s.contact.abs();
         self.largest = self
             .largest
             .max(stored.abs())
@@ -62,11 +64,12 @@ pub struct HistoryWriter {
 }
 
 impl HistoryWriter {
-    /// Creates the file and writes the header; `bodies` name the per-body columns.
+    /// Creates the file and writes the header; `bodies` name the per-body columns and `contacts`
+    /// the per-contact (and rigid wall) columns.
     ///
     /// # Errors
     /// [`Error::Write`] when the file cannot be created.
-    pub fn create(path: &Path, bodies: &[String]) -> Result<Self> {
+    pub fn create(path: &Path, bodies: &[String], contacts: &[String]) -> Result<Self> {
         let file = File::create(path).map_err(|source| Error::Write {
             path: path.to_path_buf(),
             source,
@@ -78,6 +81,11 @@ impl HistoryWriter {
         let mut header = COLUMNS.join(",");
         for b in bodies {
             header.push_str(&format!(",{b}.vx,{b}.vy"));
+        }
+        for c in contacts {
+            header.push_str(&format!(
+                ",{c}.fx,{c}.fy,{c}.max_penetration,{c}.active_nodes"
+            ));
         }
         w.line(&header)?;
         Ok(w)
@@ -96,7 +104,7 @@ impl HistoryWriter {
     /// [`Error::Write`] on I/O failure.
     pub fn row(&mut self, s: &Sample, energy_error: f64) -> Result<()> {
         let mut line = format!(
-            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
             s.time,
             s.step,
             s.dt,
@@ -104,11 +112,18 @@ impl HistoryWriter {
             s.internal,
             s.hourglass,
             s.viscous,
+            s.contact,
             s.external,
             energy_error
         );
         for v in &s.body_velocity {
             line.push_str(&format!(",{:e},{:e}", v[0], v[1]));
+        }
+        for c in &s.contacts {
+            line.push_str(&format!(
+                ",{:e},{:e},{:e},{}",
+                c.force[0], c.force[1], c.max_penetration, c.active_nodes
+            ));
         }
         self.line(&line)
     }

@@ -1,5 +1,6 @@
 //! The CPU reference solver (f64, one thread). Every GPU kernel is tested against this path.
 
+use crate::contact::ContactSet;
 use crate::error::Result;
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
@@ -27,6 +28,11 @@ pub struct CpuSolver {
     geometry: Vec<QuadGeometry>,
     /// Dissipative element state (empty when the plan has none).
     dissipation: Vec<Dissipation>,
+    /// Contact state (none without contact).
+    contact: Option<ContactSet>,
+    /// Work of the contact impulses so far, and the part of the last step's after t_n.
+    contact_work: f64,
+    contact_after: f64,
     hourglass_work: f64,
     bulk_work: f64,
     external_work: f64,
@@ -57,6 +63,9 @@ impl CpuSolver {
             Vec::new()
         };
         Self {
+            contact: ContactSet::new(&model),
+            contact_work: 0.0,
+            contact_after: 0.0,
             geometry: model.corners.iter().map(quad_geometry).collect(),
             inv_mass: model.mass.iter().map(|m| 1.0 / m).collect(),
             u: vec![[0.0; 2]; nn],
@@ -93,6 +102,11 @@ impl CpuSolver {
     /// Current half-step velocities.
     pub fn velocity(&self) -> &[[f64; 2]] {
         &self.v
+    }
+
+    /// The contact state, if the model has contact.
+    pub fn contact(&self) -> Option<&ContactSet> {
+        self.contact.as_ref()
     }
 
     /// Takes `n` steps, discarding outputs (for benchmarks).
@@ -242,20 +256,27 @@ impl CpuSolver {
             );
             return self.fail(events, msg);
         }
-        // 2. The step dt^{n+1/2}.
+        // 2. The step dt^{n+1/2} (penalty springs shorten it).
+        let dt_stable = match &self.contact {
+            Some(c) => c.limit_step(st.dt_min),
+            None => st.dt_min,
+        };
         let dt_next = match s.time_step {
             Some(fixed) => {
-                if fixed > st.dt_min {
+                if fixed > dt_stable {
+                    let by = match self.contact.as_ref().and_then(|c| c.penalty_step()) {
+                        Some((_, what)) => format!(" and the penalty springs of {what}"),
+                        None => String::new(),
+                    };
                     let msg = format!(
-                        "the fixed time_step {fixed:e} exceeds the stable step {:e} of {}",
-                        st.dt_min,
+                        "the fixed time_step {fixed:e} exceeds the stable step {dt_stable:e} of {}{by}",
                         self.element_name(st.dt_element)
                     );
                     return self.fail(events, msg);
                 }
                 fixed
             }
-            None => s.time_step_scale * st.dt_min,
+            None => s.time_step_scale * dt_stable,
         };
         if self.n == 0 {
             self.dt_first = dt_next;
@@ -277,6 +298,9 @@ impl CpuSolver {
         let output = sample_due || snapshot_due;
         if output {
             self.v_prev.copy_from_slice(&self.v);
+        }
+        if let Some(c) = self.contact.as_mut() {
+            c.keep_old_velocity(&self.v);
         }
         let mut bad = None;
         for i in 0..self.v.len() {
@@ -314,10 +338,20 @@ impl CpuSolver {
             self.external_work += step_work;
         }
         if output && self.n == 0 {
-            // v^{-1/2} = v_0 - dt_0 a_0 = 2 v_0 - v^{1/2}.
+            // v^{-1/2} = v_0 - dt_0 a_0 = 2 v_0 - v^{1/2} (of the uncoupled update: the contact
+            // impulse of step 0 then enters M (v^{1/2} - v^{-1/2}) = dt f_0 + J_0 like any other).
             for (p, v) in self.v_prev.iter_mut().zip(&self.v) {
                 *p = [2.0 * p[0] - v[0], 2.0 * p[1] - v[1]];
             }
+        }
+        // CONTACT: correct the penetrating nodes of the uncoupled update.
+        if let Some(c) = self.contact.as_mut() {
+            if self.n == 0 {
+                c.first_step_old_velocity(&self.v);
+            }
+            let w = c.apply(&self.model, &self.u, &mut self.v, dt_next, dt_n);
+            self.contact_work += w.work;
+            self.contact_after = w.after;
         }
         // 4. Output at t_n.
         if snapshot_due {
@@ -363,6 +397,12 @@ impl CpuSolver {
                 hourglass: st.hourglass_stored + self.hourglass_work,
                 viscous: self.bulk_work,
                 external: self.external_work - 0.5 * step_work,
+                contact: -(self.contact_work - self.contact_after),
+                contacts: self
+                    .contact
+                    .as_mut()
+                    .map(|c| c.sample())
+                    .unwrap_or_default(),
                 body_velocity,
             }));
             self.clock.took_sample(&s, self.t, self.dt_prev);

@@ -118,6 +118,11 @@ pub struct Sample {
     pub viscous: f64,
     /// Work done on the model by prescribed velocities.
     pub external: f64,
+    /// Contact energy: penalty energy stored plus the work the contact corrections removed
+    /// (minus the work the contact impulses did on the model).
+    pub contact: f64,
+    /// Per contact and rigid wall (in the scene's order, contacts first).
+    pub contacts: Vec<crate::contact::ContactSample>,
     /// Per body: momentum / mass at t_n.
     pub body_velocity: Vec<[f64; 2]>,
 }

@@ -25,7 +25,7 @@ fn summary(dir: &Path) -> Value {
     serde_json::from_str(&text).expect("summary.json is JSON")
 }
 
-const HISTORY_COLUMNS: &str = "time,step,dt,kinetic_energy,internal_energy,hourglass_energy,viscous_work,external_work,energy_error";
+const HISTORY_COLUMNS: &str = "time,step,dt,kinetic_energy,internal_energy,hourglass_energy,viscous_work,contact_energy,external_work,energy_error";
 
 #[test]
 fn run_writes_history_summary_and_fields() {

@@ -1,0 +1,864 @@
+//! Contact: node-to-segment contact between bodies and planar rigid walls, enforced after the
+//! uncoupled update of all bodies (the CONTACT step of the explicit flowchart, Belytschko X.6).
+//!
+//! - Surfaces ([`surface`]): boundary edges of each body with outward normals, and boundary nodes.
+//! - Broad phase ([`broad`]): a `parry2d` BVH over the master segments, inflated by a search margin;
+//!   searched again only when some contact node has moved more than half the margin since the last
+//!   search (swept: the boxes cover the node's whole path over the step).
+//! - Narrow phase ([`narrow`]): each slave node's penetrated candidate segment, its parameter xi,
+//!   normal and gap.
+//! - Lagrange multipliers with the diagonal mass: an impulse lambda >= 0 per active constraint closes
+//!   the gap at u_{n+1} exactly (the plastic-impact velocity correction); constraints coupled through
+//!   shared nodes are solved by projected Gauss-Seidel sweeps in a fixed order.
+//! - Penalty: p = k (-g) at u_n, k = s K t L^2 / A, the impulse bounded by the perfectly plastic
+//!   one, and the stable step reduced for the springs.
+//!
+//! The work the contact impulses do is accounted for in the conserved form of the energy audit:
+//! an impulse J_n at step n does the work J_n (v^{n-1/2} + v^{n+1/2}) / 2, half of it after t_n.
+
+pub mod broad;
+pub mod narrow;
+pub mod surface;
+
+use crate::model::Model;
+use crate::scene::ContactMethod;
+
+use narrow::{penetrates, project};
+use surface::{Segment, Surface};
+
+/// Projected Gauss-Seidel sweeps at most per step.
+pub const MAX_SWEEPS: usize = 500;
+/// Sweeps stop when no gap changes by more than this fraction of the search margin.
+pub const SWEEP_TOLERANCE: f64 = 1e-13;
+
+/// What a contact or wall reports at a history sample.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ContactSample {
+    /// Contact force on the first body (or on the wall's bodies), averaged over the interval since
+    /// the previous sample.
+    pub force: [f64; 2],
+    /// Largest penetration at the sample step (after the correction, for Lagrange).
+    pub max_penetration: f64,
+    /// Slave nodes with a non-zero impulse at the sample step.
+    pub active_nodes: u32,
+}
+
+/// A contact or wall as the history sees it.
+#[derive(Debug, Clone)]
+struct Interface {
+    name: String,
+    /// Impulse on the first body since the last sample.
+    impulse: [f64; 2],
+    /// Impulse on the first body at the last step.
+    step_impulse: [f64; 2],
+    /// Force-weighting time since the last sample.
+    elapsed: f64,
+    active: u32,
+    max_penetration: f64,
+}
+
+/// One pass: slave nodes of one body against master segments of another.
+#[derive(Debug, Clone)]
+struct Pass {
+    interface: usize,
+    method: ContactMethod,
+    /// Whether the slave body is the interface's first body.
+    slave_is_first: bool,
+    /// Whether the contact has the reverse pass too.
+    two_pass: bool,
+    /// Slave nodes (local indices).
+    slaves: Vec<u32>,
+    /// Each slave node's neighbours along its own surface (previous, next; local indices): its
+    /// outward normal is the perpendicular of next - previous.
+    neighbours: Vec<[u32; 2]>,
+    /// Master segments (local node indices a -> b).
+    segments: Vec<[u32; 2]>,
+    /// Penalty stiffness of each segment.
+    stiffness: Vec<f64>,
+    /// Candidate (position in `slaves`, segment) pairs from the last search, sorted.
+    candidates: Vec<(u32, u32)>,
+}
+
+/// A rigid wall.
+#[derive(Debug, Clone)]
+struct Wall {
+    interface: usize,
+    method: ContactMethod,
+    point: [f64; 2],
+    normal: [f64; 2],
+    /// Nodes (local indices).
+    nodes: Vec<u32>,
+    /// Penalty stiffness of each node.
+    stiffness: Vec<f64>,
+}
+
+/// An active constraint of the step.
+#[derive(Debug, Clone, Copy)]
+struct Constraint {
+    interface: u32,
+    s: u32,
+    /// Master nodes, `u32::MAX` for a wall.
+    a: u32,
+    b: u32,
+    xi: f64,
+    n: [f64; 2],
+    /// Gap at u_{n+1} from the velocities before this constraint's impulse.
+    g0: f64,
+    /// dt (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along n.
+    w: f64,
+    lambda: f64,
+    /// Impulse on the first body = sign * lambda * n.
+    sign: f64,
+    /// Penetration reported for it.
+    penetration: f64,
+}
+
+/// Result of the contact step.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StepWork {
+    /// Work of the step's contact impulses, J (v^{n-1/2} + v^{n+1/2}) / 2.
+    pub work: f64,
+    /// The part of it after t_n, J v^{n+1/2} / 2.
+    pub after: f64,
+}
+
+/// Contact state of a model on the CPU.
+#[derive(Debug, Clone)]
+pub struct ContactSet {
+    interfaces: Vec<Interface>,
+    passes: Vec<Pass>,
+    walls: Vec<Wall>,
+    /// Global index of each local contact node.
+    nodes: Vec<u32>,
+    /// Inverse mass per local node and direction (0 on a velocity-constrained direction).
+    inv_mass: Vec<[f64; 2]>,
+    mass: Vec<f64>,
+    /// v^{n-1/2} of the local nodes.
+    v_old: Vec<[f64; 2]>,
+    /// Positions at the last search.
+    x_ref: Vec<[f64; 2]>,
+    searched: bool,
+    margin: f64,
+    searches: u64,
+    penalty_step: Option<(f64, String)>,
+    // Scratch.
+    x_n: Vec<[f64; 2]>,
+    x_tr: Vec<[f64; 2]>,
+    v_free: Vec<[f64; 2]>,
+    dv: Vec<[f64; 2]>,
+    cons: Vec<Constraint>,
+}
+
+/// 2D bulk modulus used by the penalty stiffness: lambda (of the formulation) + mu.
+fn bulk_modulus(model: &Model, body: usize) -> f64 {
+    let p = &model.bodies[body].params;
+    p.lambda_plane + p.mu
+}
+
+fn element_area(model: &Model, e: u32) -> f64 {
+    crate::step::element::quad_geometry(&model.corners[e as usize]).area
+}
+
+impl ContactSet {
+    /// The contact state of `scene`'s model; `None` when the scene has no contact or wall.
+    pub fn new(model: &Model) -> Option<ContactSet> {
+        if !model.has_contact() {
+            return None;
+        }
+        let nb = model.bodies.len();
+        let mut surfaces: Vec<Option<Surface>> = vec![None; nb];
+        let mut surface = |b: usize| -> Surface {
+            surfaces[b]
+                .get_or_insert_with(|| Surface::of_body(model, b))
+                .clone()
+        };
+        let mut local = vec![u32::MAX; model.node_count()];
+        let mut nodes: Vec<u32> = Vec::new();
+        let mut add = |g: u32, nodes: &mut Vec<u32>| -> u32 {
+            if local[g as usize] == u32::MAX {
+                local[g as usize] = nodes.len() as u32;
+                nodes.push(g);
+            }
+            local[g as usize]
+        };
+        let mut interfaces = Vec::new();
+        let mut passes = Vec::new();
+        let mut walls = Vec::new();
+        let mut min_length = f64::INFINITY;
+        for c in &model.contacts {
+            let iface = interfaces.len();
+            interfaces.push(Interface::new(&c.name));
+            let mut dirs = vec![(c.bodies[0], c.bodies[1], true)];
+            if c.two_pass {
+                dirs.push((c.bodies[1], c.bodies[0], false));
+            }
+            // Two passes act on the same node pairs: each carries half the interface stiffness.
+            let share = if c.two_pass { 0.5 } else { 1.0 };
+            for (slave, master, slave_is_first) in dirs {
+                let ss = surface(slave);
+                let ms = surface(master);
+                let k_body = bulk_modulus(model, master) * model.bodies[master].params.thickness;
+                let mut segments = Vec::new();
+                let mut stiffness = Vec::new();
+                for s in &ms.segments {
+                    let l = surface::length(model, s);
+                    min_length = min_length.min(l);
+                    stiffness.push(
+                        share * c.penalty_scale * k_body * l * l / element_area(model, s.element),
+                    );
+                    segments.push(s.nodes.map(|g| add(g, &mut nodes)));
+                }
+                let mut prev = std::collections::BTreeMap::new();
+                let mut next = std::collections::BTreeMap::new();
+                for seg in &ss.segments {
+                    next.insert(seg.nodes[0], seg.nodes[1]);
+                    prev.insert(seg.nodes[1], seg.nodes[0]);
+                }
+                let slaves: Vec<u32> = ss.nodes.iter().map(|&g| add(g, &mut nodes)).collect();
+                let neighbours = ss
+                    .nodes
+                    .iter()
+                    .map(|g| {
+                        let p = prev.get(g).copied().unwrap_or(*g);
+                        let n = next.get(g).copied().unwrap_or(*g);
+                        [add(p, &mut nodes), add(n, &mut nodes)]
+                    })
+                    .collect();
+                passes.push(Pass {
+                    interface: iface,
+                    method: c.method,
+                    slave_is_first,
+                    two_pass: c.two_pass,
+                    slaves,
+                    neighbours,
+                    segments,
+                    stiffness,
+                    candidates: Vec::new(),
+                });
+            }
+        }
+        for w in &model.walls {
+            let iface = interfaces.len();
+            interfaces.push(Interface::new(&w.name));
+            let mut wn = Vec::new();
+            let mut stiffness = Vec::new();
+            for &b in &w.bodies {
+                let s = surface(b);
+                let k_body = bulk_modulus(model, b) * model.bodies[b].params.thickness;
+                for &g in &s.nodes {
+                    // The node's stiffest adjacent boundary segment.
+                    let k = s
+                        .segments
+                        .iter()
+                        .filter(|seg| seg.nodes.contains(&g))
+                        .map(|seg: &Segment| {
+                            let l = surface::length(model, seg);
+                            min_length = min_length.min(l);
+                            l * l / element_area(model, seg.element)
+                        })
+                        .fold(0.0f64, f64::max);
+                    wn.push(add(g, &mut nodes));
+                    stiffness.push(w.penalty_scale * k_body * k);
+                }
+            }
+            walls.push(Wall {
+                interface: iface,
+                method: w.method,
+                point: w.point,
+                normal: w.normal,
+                nodes: wn,
+                stiffness,
+            });
+        }
+        let mut constrained = vec![[false; 2]; model.node_count()];
+        for c in &model.constraints {
+            constrained[c.node as usize] = [c.vx.is_some(), c.vy.is_some()];
+        }
+        let mass: Vec<f64> = nodes.iter().map(|&g| model.mass[g as usize]).collect();
+        let inv_mass = nodes
+            .iter()
+            .zip(&mass)
+            .map(|(&g, m)| constrained[g as usize].map(|c| if c { 0.0 } else { 1.0 / m }))
+            .collect();
+        let mut set = ContactSet {
+            interfaces,
+            passes,
+            walls,
+            inv_mass,
+            mass,
+            v_old: vec![[0.0; 2]; nodes.len()],
+            x_ref: vec![[0.0; 2]; nodes.len()],
+            x_n: vec![[0.0; 2]; nodes.len()],
+            x_tr: vec![[0.0; 2]; nodes.len()],
+            v_free: vec![[0.0; 2]; nodes.len()],
+            dv: vec![[0.0; 2]; nodes.len()],
+            nodes,
+            searched: false,
+            margin: if min_length.is_finite() {
+                0.5 * min_length
+            } else {
+                0.0
+            },
+            searches: 0,
+            penalty_step: None,
+            cons: Vec::new(),
+        };
+        set.penalty_step = set.compute_penalty_step();
+        Some(set)
+    }
+
+    /// Names of the contacts and walls, in history-column order.
+    pub fn names(&self) -> Vec<String> {
+        self.interfaces.iter().map(|i| i.name.clone()).collect()
+    }
+
+    /// Search margin (half the shortest segment).
+    pub fn margin(&self) -> f64 {
+        self.margin
+    }
+
+    /// Broad-phase searches so far.
+    pub fn searches(&self) -> u64 {
+        self.searches
+    }
+
+    /// The stable step the penalty springs alone allow, 2 / omega with
+    /// omega^2 = k (1/m_slave + 1/m_master), and what sets it; `None` without penalty contact.
+    pub fn penalty_step(&self) -> Option<(f64, &str)> {
+        self.penalty_step.as_ref().map(|(d, s)| (*d, s.as_str()))
+    }
+
+    fn compute_penalty_step(&self) -> Option<(f64, String)> {
+        let mut best: Option<(f64, String)> = None;
+        let mut consider = |omega2: f64, name: &str| {
+            if omega2 > 0.0 {
+                let dt = 2.0 / omega2.sqrt();
+                if best.as_ref().is_none_or(|b| dt < b.0) {
+                    best = Some((dt, name.to_string()));
+                }
+            }
+        };
+        for p in self
+            .passes
+            .iter()
+            .filter(|p| p.method == ContactMethod::Penalty)
+        {
+            let ms = p
+                .slaves
+                .iter()
+                .map(|&l| self.mass[l as usize])
+                .fold(f64::INFINITY, f64::min);
+            let mm = p
+                .segments
+                .iter()
+                .flatten()
+                .map(|&l| self.mass[l as usize])
+                .fold(f64::INFINITY, f64::min);
+            // A node of a two-pass contact is slave in one pass and master in the other: both
+            // springs act on it.
+            let passes = if p.two_pass { 2.0 } else { 1.0 };
+            let k = passes * p.stiffness.iter().copied().fold(0.0f64, f64::max);
+            consider(
+                k * (1.0 / ms + 1.0 / mm),
+                &format!("contact {:?}", self.interfaces[p.interface].name),
+            );
+        }
+        for w in self
+            .walls
+            .iter()
+            .filter(|w| w.method == ContactMethod::Penalty)
+        {
+            let omega2 = w
+                .nodes
+                .iter()
+                .zip(&w.stiffness)
+                .map(|(&l, k)| k / self.mass[l as usize])
+                .fold(0.0f64, f64::max);
+            consider(
+                omega2,
+                &format!("rigid wall {:?}", self.interfaces[w.interface].name),
+            );
+        }
+        best
+    }
+
+    /// Combines the element stable step with the penalty springs':
+    /// 1 / dt^2 = 1 / dt_element^2 + 1 / dt_penalty^2 (dt0 / sqrt(1 + k_p / k_e) for a node on a mesh).
+    pub fn limit_step(&self, dt_element: f64) -> f64 {
+        match self.penalty_step {
+            Some((dp, _)) => 1.0 / (1.0 / (dt_element * dt_element) + 1.0 / (dp * dp)).sqrt(),
+            None => dt_element,
+        }
+    }
+
+    /// Keeps v^{n-1/2} of the contact nodes (call before the node update).
+    pub fn keep_old_velocity(&mut self, v: &[[f64; 2]]) {
+        for (o, &g) in self.v_old.iter_mut().zip(&self.nodes) {
+            *o = v[g as usize];
+        }
+    }
+
+    /// On the first step v^{-1/2} = 2 v_0 - v^{1/2}: call after the node update and boundaries.
+    pub fn first_step_old_velocity(&mut self, v: &[[f64; 2]]) {
+        for (o, &g) in self.v_old.iter_mut().zip(&self.nodes) {
+            let w = v[g as usize];
+            *o = [2.0 * o[0] - w[0], 2.0 * o[1] - w[1]];
+        }
+    }
+
+    /// Slave nodes that penetrate a master segment or a wall in the reference configuration:
+    /// (interface name, global node, penetration).
+    pub fn initial_overlaps(&mut self, model: &Model) -> Vec<(String, u32, f64)> {
+        let u = vec![[0.0; 2]; model.node_count()];
+        let v = u.clone();
+        self.positions(model, &u, &v, 0.0);
+        self.search();
+        let mut out = Vec::new();
+        for p in &self.passes {
+            let mut k = 0;
+            while k < p.candidates.len() {
+                let si = p.candidates[k].0;
+                let s = p.slaves[si as usize];
+                let mut worst: Option<f64> = None;
+                while k < p.candidates.len() && p.candidates[k].0 == si {
+                    let [a, b] = p.segments[p.candidates[k].1 as usize];
+                    let x = &self.x_n;
+                    if let Some(pr) = project(x[s as usize], x[a as usize], x[b as usize]) {
+                        if pr.gap < 0.0 && pr.gap > -0.5 * pr.length {
+                            worst = Some(worst.map_or(pr.gap, |w: f64| w.max(pr.gap)));
+                        }
+                    }
+                    k += 1;
+                }
+                if let Some(g) = worst {
+                    out.push((
+                        self.interfaces[p.interface].name.clone(),
+                        self.nodes[s as usize],
+                        -g,
+                    ));
+                }
+            }
+        }
+        for w in &self.walls {
+            for &l in &w.nodes {
+                let g = dot(sub(self.x_n[l as usize], w.point), w.normal);
+                if g < 0.0 {
+                    out.push((
+                        self.interfaces[w.interface].name.clone(),
+                        self.nodes[l as usize],
+                        -g,
+                    ));
+                }
+            }
+        }
+        self.searched = false;
+        out
+    }
+
+    fn positions(&mut self, model: &Model, u: &[[f64; 2]], v: &[[f64; 2]], dt: f64) {
+        for (l, &g) in self.nodes.iter().enumerate() {
+            let g = g as usize;
+            let p = model.position[g];
+            let x = [p[0] + u[g][0], p[1] + u[g][1]];
+            self.x_n[l] = x;
+            self.v_free[l] = v[g];
+            self.x_tr[l] = [x[0] + dt * v[g][0], x[1] + dt * v[g][1]];
+        }
+    }
+
+    fn search_due(&self) -> bool {
+        if !self.searched {
+            return true;
+        }
+        let h2 = 0.25 * self.margin * self.margin;
+        self.x_ref
+            .iter()
+            .zip(self.x_n.iter().zip(&self.x_tr))
+            .any(|(r, (a, b))| dist2(*r, *a) > h2 || dist2(*r, *b) > h2)
+    }
+
+    fn search(&mut self) {
+        for p in &mut self.passes {
+            p.candidates =
+                broad::candidates(&p.slaves, &p.segments, &self.x_n, &self.x_tr, self.margin);
+        }
+        self.x_ref.copy_from_slice(&self.x_tr);
+        self.searched = true;
+        self.searches += 1;
+    }
+
+    /// The CONTACT step: after the uncoupled update (v = v^{n+1/2} of the free bodies, boundaries
+    /// applied), corrects the velocities of penetrating nodes so that u_{n+1} = u_n + dt v^{n+1/2}
+    /// satisfies the constraints (Lagrange), or applies the bounded penalty impulses.
+    /// `dt` is dt^{n+1/2}, `dt_n` the step of the velocity update.
+    pub fn apply(
+        &mut self,
+        model: &Model,
+        u: &[[f64; 2]],
+        v: &mut [[f64; 2]],
+        dt: f64,
+        dt_n: f64,
+    ) -> StepWork {
+        self.positions(model, u, v, dt);
+        if self.search_due() {
+            self.search();
+        }
+        self.cons.clear();
+        for d in &mut self.dv {
+            *d = [0.0; 2];
+        }
+        self.collect_passes(dt, dt_n);
+        self.collect_walls(dt, dt_n);
+        // Penalty impulses (marked by w < 0, impulse in lambda): fixed, applied first.
+        let n_pen = self.cons.iter().filter(|c| c.w < 0.0).count();
+        for k in 0..self.cons.len() {
+            let c = self.cons[k];
+            if c.w < 0.0 {
+                self.impulse(&c, c.lambda);
+            }
+        }
+        // Lagrange: projected Gauss-Seidel in the fixed constraint order.
+        let tol = SWEEP_TOLERANCE * self.margin.max(f64::MIN_POSITIVE);
+        if self.cons.len() > n_pen {
+            for _ in 0..MAX_SWEEPS {
+                let mut change: f64 = 0.0;
+                for k in 0..self.cons.len() {
+                    let c = self.cons[k];
+                    if c.w < 0.0 {
+                        continue;
+                    }
+                    let g = c.g0 + dt * self.relative(&c);
+                    let lambda = (c.lambda - g / c.w).max(0.0);
+                    let d = lambda - c.lambda;
+                    if d != 0.0 {
+                        self.impulse(&c, d);
+                        self.cons[k].lambda = lambda;
+                        change = change.max((d * c.w).abs());
+                    }
+                }
+                if change <= tol {
+                    break;
+                }
+            }
+        }
+        // Reports.
+        for i in &mut self.interfaces {
+            i.step_impulse = [0.0; 2];
+            i.active = 0;
+            i.max_penetration = 0.0;
+            i.elapsed += dt_n;
+        }
+        let mut last_slave = (u32::MAX, u32::MAX);
+        for k in 0..self.cons.len() {
+            let c = self.cons[k];
+            let pen = if c.w < 0.0 {
+                c.penetration
+            } else {
+                -(c.g0 + dt * self.relative(&c))
+            };
+            let i = &mut self.interfaces[c.interface as usize];
+            if c.lambda > 0.0 {
+                i.step_impulse[0] += c.sign * c.lambda * c.n[0];
+                i.step_impulse[1] += c.sign * c.lambda * c.n[1];
+                if last_slave != (c.interface, c.s) {
+                    i.active += 1;
+                    last_slave = (c.interface, c.s);
+                }
+            }
+            i.max_penetration = i.max_penetration.max(pen);
+        }
+        for i in &mut self.interfaces {
+            i.impulse[0] += i.step_impulse[0];
+            i.impulse[1] += i.step_impulse[1];
+        }
+        // Velocities and the work of the impulses (free directions only: on a constrained one the
+        // boundary absorbs the impulse and its reaction cancels it).
+        let mut work = StepWork::default();
+        for (l, &g) in self.nodes.iter().enumerate() {
+            let d = self.dv[l];
+            if d == [0.0; 2] {
+                continue;
+            }
+            let g = g as usize;
+            let m = self.mass[l];
+            for k in 0..2 {
+                let vn = v[g][k] + d[k];
+                let j = m * d[k];
+                work.work += 0.5 * j * (self.v_old[l][k] + vn);
+                work.after += 0.5 * j * vn;
+                v[g][k] = vn;
+            }
+        }
+        work
+    }
+
+    /// Relative normal velocity change of constraint `c` from the impulses so far.
+    #[inline]
+    fn relative(&self, c: &Constraint) -> f64 {
+        let ds = self.dv[c.s as usize];
+        let mut r = ds[0] * c.n[0] + ds[1] * c.n[1];
+        if c.a != u32::MAX {
+            let da = self.dv[c.a as usize];
+            let db = self.dv[c.b as usize];
+            r -= (1.0 - c.xi) * (da[0] * c.n[0] + da[1] * c.n[1])
+                + c.xi * (db[0] * c.n[0] + db[1] * c.n[1]);
+        }
+        r
+    }
+
+    /// Applies impulse `lambda` along `c.n` (slave) and its reaction (master nodes).
+    #[inline]
+    fn impulse(&mut self, c: &Constraint, lambda: f64) {
+        let im = self.inv_mass[c.s as usize];
+        let d = &mut self.dv[c.s as usize];
+        d[0] += lambda * c.n[0] * im[0];
+        d[1] += lambda * c.n[1] * im[1];
+        if c.a != u32::MAX {
+            for (node, share) in [(c.a, 1.0 - c.xi), (c.b, c.xi)] {
+                let im = self.inv_mass[node as usize];
+                let d = &mut self.dv[node as usize];
+                d[0] -= share * lambda * c.n[0] * im[0];
+                d[1] -= share * lambda * c.n[1] * im[1];
+            }
+        }
+    }
+
+    /// dt (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along n (per direction, constrained directions rigid).
+    fn weight(&self, s: u32, ab: Option<(u32, u32)>, xi: f64, n: [f64; 2], dt: f64) -> f64 {
+        let along = |l: u32| {
+            let im = self.inv_mass[l as usize];
+            n[0] * n[0] * im[0] + n[1] * n[1] * im[1]
+        };
+        let mut w = along(s);
+        if let Some((a, b)) = ab {
+            w += (1.0 - xi) * (1.0 - xi) * along(a) + xi * xi * along(b);
+        }
+        dt * w
+    }
+
+    fn free_relative(&self, s: u32, ab: Option<(u32, u32)>, xi: f64, n: [f64; 2]) -> f64 {
+        let vs = self.v_free[s as usize];
+        let mut r = dot(vs, n);
+        if let Some((a, b)) = ab {
+            r -=
+                (1.0 - xi) * dot(self.v_free[a as usize], n) + xi * dot(self.v_free[b as usize], n);
+        }
+        r
+    }
+
+    fn collect_passes(&mut self, dt: f64, dt_n: f64) {
+        for pi in 0..self.passes.len() {
+            let p = &self.passes[pi];
+            let sign = if p.slave_is_first { 1.0 } else { -1.0 };
+            let mut k = 0;
+            while k < p.candidates.len() {
+                let si = p.candidates[k].0;
+                let s = p.slaves[si as usize];
+                // The slave node's own outward normal (unnormalised), at u_n.
+                let [np, nn] = p.neighbours[si as usize];
+                let t = sub(self.x_n[nn as usize], self.x_n[np as usize]);
+                let own = [t[1], -t[0]];
+                // (key, segment, projection) of the best candidate.
+                let mut best: Option<((f64, f64), usize, narrow::Projection)> = None;
+                while k < p.candidates.len() && p.candidates[k].0 == si {
+                    let j = p.candidates[k].1 as usize;
+                    k += 1;
+                    let [a, b] = p.segments[j];
+                    let (sl, al, bl) = (s as usize, a as usize, b as usize);
+                    // Only segments that face the node's own surface: at a corner shared by
+                    // two segments this keeps the face the node meets, not the edge it touches
+                    // end-on.
+                    let seg_t = sub(self.x_n[bl], self.x_n[al]);
+                    if dot(own, [seg_t[1], -seg_t[0]]) >= 0.0 {
+                        continue;
+                    }
+                    match p.method {
+                        ContactMethod::Lagrange => {
+                            let Some(pr) = project(self.x_tr[sl], self.x_tr[al], self.x_tr[bl])
+                            else {
+                                continue;
+                            };
+                            // Gap before the step, to the segment's line at u_n.
+                            let before = line_gap(self.x_n[sl], self.x_n[al], self.x_n[bl]);
+                            if penetrates(pr.gap, before, pr.length) {
+                                // The segment the node came from the front of, then the closest.
+                                let key = (before.min(0.0), pr.gap);
+                                if best.is_none_or(|(bk, _, _)| key > bk) {
+                                    best = Some((key, j, pr));
+                                }
+                            }
+                        }
+                        ContactMethod::Penalty => {
+                            let Some(pr) = project(self.x_n[sl], self.x_n[al], self.x_n[bl]) else {
+                                continue;
+                            };
+                            if pr.gap < 0.0 && pr.gap > -0.5 * pr.length {
+                                let key = (pr.gap, 0.0);
+                                if best.is_none_or(|(bk, _, _)| key > bk) {
+                                    best = Some((key, j, pr));
+                                }
+                            }
+                        }
+                    }
+                }
+                let Some((_, j, pr)) = best else { continue };
+                let [a, b] = p.segments[j];
+                let w = self.weight(s, Some((a, b)), pr.xi, pr.normal, dt);
+                if w.is_nan() || w <= 0.0 {
+                    continue;
+                }
+                let mut c = Constraint {
+                    interface: p.interface as u32,
+                    s,
+                    a,
+                    b,
+                    xi: pr.xi,
+                    n: pr.normal,
+                    g0: pr.gap,
+                    w,
+                    lambda: 0.0,
+                    sign,
+                    penetration: 0.0,
+                };
+                if p.method == ContactMethod::Penalty {
+                    let rate = self.free_relative(s, Some((a, b)), pr.xi, pr.normal);
+                    let g_trial = pr.gap + dt * rate;
+                    c.lambda = penalty_impulse(p.stiffness[j], pr.gap, rate, g_trial, w, dt, dt_n);
+                    c.penetration = -pr.gap;
+                    c.w = -w;
+                }
+                self.cons.push(c);
+            }
+        }
+    }
+
+    fn collect_walls(&mut self, dt: f64, dt_n: f64) {
+        for wi in 0..self.walls.len() {
+            let w = &self.walls[wi];
+            for (idx, &l) in w.nodes.iter().enumerate() {
+                let n = w.normal;
+                let (g, g_tr) = (
+                    dot(sub(self.x_n[l as usize], w.point), n),
+                    dot(sub(self.x_tr[l as usize], w.point), n),
+                );
+                let weight = self.weight(l, None, 0.0, n, dt);
+                if weight.is_nan() || weight <= 0.0 {
+                    continue;
+                }
+                let mut c = Constraint {
+                    interface: w.interface as u32,
+                    s: l,
+                    a: u32::MAX,
+                    b: u32::MAX,
+                    xi: 0.0,
+                    n,
+                    g0: g_tr,
+                    w: weight,
+                    lambda: 0.0,
+                    sign: 1.0,
+                    penetration: 0.0,
+                };
+                match w.method {
+                    ContactMethod::Lagrange => {
+                        if g_tr >= 0.0 {
+                            continue;
+                        }
+                    }
+                    ContactMethod::Penalty => {
+                        if g >= 0.0 {
+                            continue;
+                        }
+                        let rate = dot(self.v_free[l as usize], n);
+                        c.lambda =
+                            penalty_impulse(w.stiffness[idx], g, rate, g_tr, weight, dt, dt_n);
+                        c.penetration = -g;
+                        c.w = -weight;
+                    }
+                }
+                self.cons.push(c);
+            }
+        }
+    }
+
+    /// The contacts' history values at a sample; resets the interval averages.
+    pub fn sample(&mut self) -> Vec<ContactSample> {
+        self.interfaces
+            .iter_mut()
+            .map(|i| {
+                let force = if i.elapsed > 0.0 {
+                    [i.impulse[0] / i.elapsed, i.impulse[1] / i.elapsed]
+                } else {
+                    [0.0; 2]
+                };
+                i.impulse = [0.0; 2];
+                i.elapsed = 0.0;
+                ContactSample {
+                    force,
+                    max_penetration: i.max_penetration,
+                    active_nodes: i.active,
+                }
+            })
+            .collect()
+    }
+}
+
+/// Penalty impulse over the step for a spring of stiffness `k` at gap `g` (< 0), bounded so that
+/// one step never does more than the perfectly plastic impulse (Belytschko X.6):
+/// - while the free update approaches (`rate` < 0, the relative normal velocity), at most the
+///   impulse that stops the approach: no release within the impact step, no velocity reversal;
+/// - while it separates, at most the impulse that brings the node back onto the surface by
+///   u_{n+1} (the gap `g_trial` of the free update closed), so a spring never throws it off.
+///
+/// For omega dt well below 1 neither bound is active and the spring acts unchanged; for a stiff
+/// spring the bounds keep the run from gaining energy. `w` is dt (1/m_s + ...).
+#[inline]
+pub fn penalty_impulse(k: f64, g: f64, rate: f64, g_trial: f64, w: f64, dt: f64, dt_n: f64) -> f64 {
+    let spring = dt_n * k * (-g).max(0.0);
+    let bound = if rate < 0.0 {
+        -rate * dt / w
+    } else {
+        (-g_trial / w).max(0.0)
+    };
+    spring.min(bound)
+}
+
+impl Interface {
+    fn new(name: &str) -> Self {
+        Interface {
+            name: name.to_string(),
+            impulse: [0.0; 2],
+            step_impulse: [0.0; 2],
+            elapsed: 0.0,
+            active: 0,
+            max_penetration: 0.0,
+        }
+    }
+}
+
+#[inline]
+fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
+}
+
+#[inline]
+fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+#[inline]
+fn dist2(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let d = sub(a, b);
+    dot(d, d)
+}
+
+/// Signed distance of `p` to the line of `a -> b` (outward normal side positive).
+#[inline]
+fn line_gap(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let t = sub(b, a);
+    let l = t[0].hypot(t[1]);
+    if l > 0.0 {
+        dot(sub(p, a), [t[1] / l, -t[0] / l])
+    } else {
+        0.0
+    }
+}
