@@ -277,9 +277,13 @@ fn progress_bar() -> Option<indicatif::ProgressBar> {
 
 fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
     let schedule = ricochet::run::schedule(scene);
+    let mut contact = ricochet::contact::ContactSet::new(&model);
     let solver = CpuSolver::new(model, plan.clone(), schedule);
     let model = solver.model();
-    let (dt, e) = solver.stable_step();
+    let (dt_element, e) = solver.stable_step();
+    let dt = contact
+        .as_ref()
+        .map_or(dt_element, |c| c.limit_step(dt_element));
     let step = scene
         .run
         .time_step
@@ -319,6 +323,36 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
         "time step  stable {dt:.4e} s (element {e}); step {step:.4e} s; about {steps} steps to {:e} s",
         scene.run.end_time
     );
+    if let Some(c) = contact.as_mut() {
+        println!(
+            "contact    {} contact(s), {} rigid wall(s): {}; search margin {:.4e} m",
+            plan.contacts,
+            plan.walls,
+            c.names().join(", "),
+            c.margin()
+        );
+        match c.penalty_step() {
+            Some((dp, what)) => println!(
+                "  penalty  {what} alone allows {dp:.4e} s; with the elements {dt:.4e} s: {}",
+                if dt < 0.99 * dt_element {
+                    format!("it controls dt (element step {dt_element:.4e} s)")
+                } else {
+                    "the elements control dt".to_string()
+                }
+            ),
+            None => println!("  lagrange no effect on the stable step"),
+        }
+        let overlaps = c.initial_overlaps(model);
+        if overlaps.is_empty() {
+            println!("  overlaps none at t = 0");
+        }
+        for (name, node, depth) in overlaps.iter().take(20) {
+            println!("  overlap  {name}: node {node} penetrates {depth:.4e} m at t = 0");
+        }
+        if overlaps.len() > 20 {
+            println!("  overlap  ... {} in all", overlaps.len());
+        }
+    }
     let bytes_cpu = plan.nodes * (8 * 2 * 4 + 8)
         + plan.elements * (16 + 64 + 4)
         + plan.elements * if plan.has_dissipation() { 48 } else { 0 };

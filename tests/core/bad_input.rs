@@ -377,3 +377,63 @@ fn the_base_scene_is_valid() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+fn with_contact(extra: &str) -> String {
+    format!(
+        "{}\n[[body]]\nname = \"other\"\nmaterial = \"steel\"\nmesh = {{ rectangle = {{ origin = [0.2, 0.0], size = [0.1, 0.05], cells = [2, 2] }} }}\n{extra}",
+        valid()
+    )
+}
+
+#[test]
+fn contact_keys_are_checked() {
+    expect_rejected(
+        "contact_unknown_body",
+        &with_contact("[[contact]]\nbodies = [\"block\", \"nothing\"]\n"),
+        &["contact[0].bodies", "\"nothing\"", "no body of that name"],
+    );
+    expect_rejected(
+        "contact_one_body",
+        &with_contact("[[contact]]\nbodies = [\"block\"]\n"),
+        &["contact[0].bodies", "exactly two"],
+    );
+    expect_rejected(
+        "contact_self",
+        &with_contact("[[contact]]\nbodies = [\"block\", \"block\"]\n"),
+        &["contact[0].bodies", "must differ"],
+    );
+    expect_rejected(
+        "contact_method",
+        &with_contact("[[contact]]\nbodies = [\"block\", \"other\"]\nmethod = \"glue\"\n"),
+        &["contact[0].method", "\"glue\"", "lagrange"],
+    );
+    expect_rejected(
+        "contact_scale_without_penalty",
+        &with_contact("[[contact]]\nbodies = [\"block\", \"other\"]\npenalty_scale = 0.5\n"),
+        &["contact[0].penalty_scale", "0.5", "penalty"],
+    );
+    expect_rejected(
+        "contact_negative_scale",
+        &with_contact(
+            "[[contact]]\nbodies = [\"block\", \"other\"]\nmethod = \"penalty\"\npenalty_scale = -1.0\n",
+        ),
+        &["contact[0].penalty_scale", "-1.0", "positive"],
+    );
+    expect_rejected(
+        "contact_duplicate_name",
+        &with_contact(
+            "[[contact]]\nbodies = [\"block\", \"other\"]\n[[contact]]\nbodies = [\"block\", \"other\"]\n",
+        ),
+        &["contact[1].name", "\"block-other\"", "distinct"],
+    );
+    expect_rejected(
+        "wall_zero_normal",
+        &with_contact("[[rigid_wall]]\npoint = [0.0, 0.0]\nnormal = [0.0, 0.0]\n"),
+        &["rigid_wall[0].normal", "[0.0, 0.0]", "non-zero"],
+    );
+    expect_rejected(
+        "wall_unknown_key",
+        &with_contact("[[rigid_wall]]\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\nfriction = 0.3\n"),
+        &["friction"],
+    );
+}
