@@ -36,7 +36,11 @@ impl Mesh {
                 center,
                 radius,
                 cells,
-            } => disk(center, radius, cells),
+                refine,
+            } => match refine {
+                Some(r) => graded_disk(center, radius, cells, r.toward, r.ratio),
+                None => disk(center, radius, cells),
+            },
         }
     }
 
@@ -91,7 +95,58 @@ pub fn rectangle(origin: [f64; 2], size: [f64; 2], cells: [usize; 2]) -> Mesh {
 /// `cells` (around) x `max(1, cells/2)` (radial) quads. Radial lines are straight, so every quad
 /// is convex and none is degenerate.
 pub fn disk(center: [f64; 2], radius: f64, cells: usize) -> Mesh {
+    graded_disk(center, radius, cells, [1.0, 0.0], 1.0)
+}
+
+/// The stretch parameter beta of `sinh(beta s) / sinh(beta)` whose slope at s = 0 is `1 / ratio`
+/// (beta = 0: no stretch).
+fn stretch(ratio: f64) -> f64 {
+    if ratio <= 1.0 {
+        return 0.0;
+    }
+    // beta / sinh(beta) decreases from 1 (beta = 0) to 0: bisection.
+    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+    while hi / hi.sinh() > 1.0 / ratio {
+        hi *= 2.0;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid / mid.sinh() > 1.0 / ratio {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// `sinh(beta s) / sinh(beta)` on [-1, 1] (the identity for beta = 0).
+fn stretched(beta: f64, s: f64) -> f64 {
+    if beta == 0.0 {
+        s
+    } else {
+        (beta * s).sinh() / beta.sinh()
+    }
+}
+
+/// O-grid disk refined toward the rim point in direction `toward` (a unit vector) and the point
+/// opposite: the spacing along the rim there is `ratio` times finer than uniform, and the
+/// element layers under the rim are thinned everywhere so that the elements at that point are
+/// about square. `ratio = 1` gives [`disk`].
+pub fn graded_disk(
+    center: [f64; 2],
+    radius: f64,
+    cells: usize,
+    toward: [f64; 2],
+    ratio: f64,
+) -> Mesh {
     let n = cells;
+    let beta = stretch(ratio);
+    // Radial layers: uniform spacing R / n (m = n / 2 layers over R / 2); the rim layer is made
+    // as thin as the rim spacing at the focus, (pi R / 2n) / ratio.
+    let beta_r = stretch(ratio * 2.0 / std::f64::consts::PI);
+    let (fs, fc) = (toward[1].atan2(toward[0])).sin_cos();
+    let turn = |p: [f64; 2]| [fc * p[0] - fs * p[1], fs * p[0] + fc * p[1]];
     let m = (n / 2).max(1);
     let a = 0.5 * radius; // core half-width
     let mut nodes: Vec<[f64; 2]> = Vec::new();
@@ -113,7 +168,7 @@ pub fn disk(center: [f64; 2], radius: f64, cells: usize) -> Mesh {
     for j in 0..=n {
         for i in 0..=n {
             let x = -a + 2.0 * a * i as f64 / n as f64;
-            let y = -a + 2.0 * a * j as f64 / n as f64;
+            let y = a * stretched(beta, -1.0 + 2.0 * j as f64 / n as f64);
             core[j * (n + 1) + i] = add([x, y], &mut nodes);
         }
     }
@@ -129,12 +184,18 @@ pub fn disk(center: [f64; 2], radius: f64, cells: usize) -> Mesh {
         let rot = |p: [f64; 2]| [c * p[0] - s * p[1], s * p[0] + c * p[1]];
         let mut ids = vec![0u32; (n + 1) * (m + 1)];
         for t in 0..=n {
-            let eta = -1.0 + 2.0 * t as f64 / n as f64;
+            let uniform = -1.0 + 2.0 * t as f64 / n as f64;
+            // The blocks facing +x and -x (of the unturned disk) carry the refinement.
+            let eta = if k % 2 == 0 {
+                stretched(beta, uniform)
+            } else {
+                uniform
+            };
             let inner = [a, a * eta];
             let theta = eta * std::f64::consts::FRAC_PI_4;
             let outer = [radius * theta.cos(), radius * theta.sin()];
             for r in 0..=m {
-                let f = r as f64 / m as f64;
+                let f = 1.0 - stretched(beta_r, 1.0 - r as f64 / m as f64);
                 let p = [
                     inner[0] + f * (outer[0] - inner[0]),
                     inner[1] + f * (outer[1] - inner[1]),
@@ -149,6 +210,10 @@ pub fn disk(center: [f64; 2], radius: f64, cells: usize) -> Mesh {
                 quads.push([id(t, r), id(t, r + 1), id(t + 1, r + 1), id(t + 1, r)]);
             }
         }
+    }
+    // Turned after merging, so that shared nodes are merged in the unturned frame.
+    for p in &mut nodes {
+        *p = turn(*p);
     }
     Mesh {
         origin: center,

@@ -126,6 +126,14 @@ struct RawDisk {
     center: [f64; 2],
     radius: f64,
     cells: i64,
+    refine: Option<RawRefine>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRefine {
+    toward: [f64; 2],
+    ratio: f64,
 }
 
 #[derive(Debug, Deserialize)]
@@ -241,7 +249,18 @@ pub enum MeshSpec {
         radius: f64,
         /// Cells along a quarter of the circumference (and across the core).
         cells: usize,
+        /// Grading toward a rim point (a contact point), if any.
+        refine: Option<DiskRefinement>,
     },
+}
+
+/// Grading of a disk mesh toward a rim point and the point opposite.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DiskRefinement {
+    /// Unit direction from the centre to the refined rim point.
+    pub toward: [f64; 2],
+    /// Uniform rim spacing over the spacing at that point (>= 1).
+    pub ratio: f64,
 }
 
 /// A body, validated.
@@ -438,6 +457,15 @@ impl Validator<'_> {
         } else {
             Err(self.invalid(key, fmt_num(x), "must be a finite number >= 0"))
         }
+    }
+
+    /// A non-zero finite vector, normalised.
+    fn unit(&self, key: &str, v: [f64; 2]) -> Result<[f64; 2]> {
+        let len = v[0].hypot(v[1]);
+        if !(len.is_finite() && len > 0.0) {
+            return Err(self.invalid(key, format!("{v:?}"), "must be a finite non-zero vector"));
+        }
+        Ok([v[0] / len, v[1] / len])
     }
 
     fn finite(&self, key: &str, x: f64) -> Result<f64> {
@@ -917,10 +945,29 @@ impl Validator<'_> {
                         "must be between 2 and 20000 (cells along a quarter circumference)",
                     ));
                 }
+                let refine = match &d.refine {
+                    None => None,
+                    Some(r) => {
+                        let rk = format!("{k}.refine");
+                        let toward = self.unit(&format!("{rk}.toward"), r.toward)?;
+                        if !(r.ratio.is_finite() && (1.0..=1000.0).contains(&r.ratio)) {
+                            return Err(self.invalid(
+                                format!("{rk}.ratio"),
+                                r.ratio.to_string(),
+                                "must be between 1 and 1000 (uniform rim spacing over the spacing at the refined point)",
+                            ));
+                        }
+                        Some(DiskRefinement {
+                            toward,
+                            ratio: r.ratio,
+                        })
+                    }
+                };
                 Ok(MeshSpec::Disk {
                     center: d.center,
                     radius,
                     cells: d.cells as usize,
+                    refine,
                 })
             }
             _ => Err(self.invalid(

@@ -483,3 +483,62 @@ fn rod_face_nodes_carry_half_element_masses() {
         assert!(rel(model.mass[i], half, half) < 1e-12);
     }
 }
+
+/// The disk-on-a-wall asset at speed `v0`: contact time, peak force (N/m), centre-of-mass
+/// restitution, the largest total-energy drift over the run relative to E0, and the contact's loss.
+fn disk_on_wall(v0: f64) -> (f64, f64, f64, f64, f64) {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/disk_wall.toml"
+    ))
+    .expect("read assets/disk_wall.toml")
+    .replace(
+        "initial_velocity = [1.0, 0.0]",
+        &format!("initial_velocity = [{v0:e}, 0.0]"),
+    );
+    let (r, model) = run_text(&text, "disk_wall");
+    let e0 = 0.5 * model.bodies[0].mass * v0 * v0;
+    let rows = &r.samples;
+    let f: Vec<f64> = rows.iter().map(|(s, _)| s.contacts[0].force[0]).collect();
+    let first = f.iter().position(|x| *x != 0.0).expect("contact");
+    let last = f.iter().rposition(|x| *x != 0.0).expect("contact");
+    let t = |i: usize| rows[i].0.time;
+    // Rows are history intervals ending at t(i): the contact spans from the start of the first
+    // row with a force to the end of the last.
+    let interval = t(1) - t(0);
+    let duration = t(last) - t(first) + interval;
+    let peak = f.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let e = -rows.last().unwrap().0.body_velocity[0][0] / v0;
+    let drift = rows
+        .iter()
+        .map(|(s, _)| ((s.kinetic + s.internal + s.hourglass) / e0 - 1.0).abs())
+        .fold(0.0, f64::max);
+    let loss = rows.last().unwrap().0.contact / e0;
+    (duration, peak, e, drift, loss)
+}
+
+#[test]
+fn elastic_disk_on_a_rigid_wall_matches_the_contact_time_peak_force_and_restitution() {
+    // REFERENCES.md section 5: (v0, contact time, peak force, restitution).
+    for (v0, time, force, restitution) in [
+        (1.0, 89.5e-6, 2.25e6, 0.992),
+        (10.0, 77.1e-6, 26.5e6, 0.980),
+    ] {
+        let (duration, peak, e, drift, loss) = disk_on_wall(v0);
+        eprintln!(
+            "disk on wall at {v0} m/s: contact {:.2} us ({:+.2} %), peak {:.3} MN/m ({:+.2} %), \
+             restitution {e:.4} (reference {restitution}), energy drift {drift:.2e}, contact loss {loss:.2e}",
+            duration * 1e6,
+            100.0 * (duration / time - 1.0),
+            peak * 1e-6,
+            100.0 * (peak / force - 1.0)
+        );
+        assert!(
+            (duration / time - 1.0).abs() < 0.03,
+            "contact time {duration}"
+        );
+        assert!((peak / force - 1.0).abs() < 0.05, "peak force {peak}");
+        assert!((e - restitution).abs() < 0.01, "restitution {e}");
+        assert!(drift < 5e-3, "energy drift {drift}");
+    }
+}
