@@ -19,6 +19,10 @@ struct Params {
     n_instances: u32,     // sum reductions on sample steps
     sum_groups: u32,      // workgroups of all sum reductions together
     ticks_per_second: f32, // time is kept as a 64-bit count of ticks of end_time / 2^40
+    penalty_dt: f32,      // stable step of the penalty springs alone (0: none)
+    _p0: u32,
+    _p1: u32,
+    _p2: u32,
 }
 
 // Run control, advanced on the GPU so that a step needs no readback.

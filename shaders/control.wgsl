@@ -93,10 +93,15 @@ fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
         fail(5u, at, dt_min);
         return;
     }
-    var dt_next = params.scale * dt_min;
+    var dt_stable = dt_min;
+    if (params.penalty_dt > 0.0) {
+        // The penalty springs: 1 / dt^2 = 1 / dt_element^2 + 1 / dt_penalty^2.
+        dt_stable = 1.0 / sqrt(1.0 / (dt_min * dt_min) + 1.0 / (params.penalty_dt * params.penalty_dt));
+    }
+    var dt_next = params.scale * dt_stable;
     if (params.fixed_dt > 0.0) {
-        if (params.fixed_dt > dt_min) {
-            fail(3u, at, dt_min);
+        if (params.fixed_dt > dt_stable) {
+            fail(3u, at, dt_stable);
             return;
         }
         dt_next = params.fixed_dt;

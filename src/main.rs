@@ -202,12 +202,6 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             };
             let mut solver: Box<dyn Solver> = match backend {
                 Backend::Cpu => cpu(),
-                Backend::Auto if plan.has(ricochet::plan::Stage::Contact) => {
-                    eprintln!(
-                        "notice: contact runs on the CPU backend only for now; running on the CPU"
-                    );
-                    cpu()
-                }
                 Backend::Auto => match GpuContext::new(adapter.as_deref()) {
                     Ok(ctx) => Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?),
                     Err(e) => {
@@ -253,6 +247,19 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 s.max_energy_error,
                 out.display()
             );
+            if s.contact_searches > 0 {
+                println!(
+                    "contact: {} broad-phase searches in {} steps",
+                    s.contact_searches, s.steps
+                );
+                if s.steps >= 20 && 2 * s.contact_searches > s.steps {
+                    eprintln!(
+                        "warning: contact nodes moved more than half the search margin in most steps, \
+                         so the search ran (almost) every step instead of every few: the margin is half \
+                         the shortest contact edge; fast impacts on fine surfaces cost a search per step"
+                    );
+                }
+            }
             if s.status != "completed" {
                 eprintln!("error: {}", s.message);
                 return Ok(ExitCode::from(EXIT_FAILED_RUN));

@@ -144,6 +144,7 @@ pub fn run(
         max_energy_error: audit.max_error,
         gpu_submissions: counters.submissions,
         gpu_readbacks: counters.readbacks,
+        contact_searches: counters.contact_searches,
         stage_seconds: solver.stage_seconds(),
         history_rows: samples.len(),
         snapshots: fields.as_ref().map(|f| f.count()).unwrap_or(0),

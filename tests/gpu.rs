@@ -467,16 +467,5 @@ fn unstable_gpu_run_stops_with_a_diagnostic() {
     );
 }
 
-#[test]
-fn contact_scenes_are_refused_by_the_gpu_backend_with_a_clear_error() {
-    let Some(ctx) = context() else { return };
-    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let (scene, model, plan) = load(&asset("rods_impact.toml"), "rods_impact");
-    match GpuSolver::new(ctx, &model, &plan, schedule(&scene)) {
-        Ok(_) => panic!("a contact scene must not run on the GPU without contact kernels"),
-        Err(e) => {
-            let m = e.to_string();
-            assert!(m.contains("CPU backend only"), "{m}");
-        }
-    }
-}
+#[path = "gpu/contact.rs"]
+mod contact;

@@ -4,7 +4,7 @@
 use std::borrow::Cow;
 
 pub use super::shader::Features;
-use super::{boundary, control, element, node, reduce, shader};
+use super::{boundary, contact, control, element, node, reduce, shader};
 
 /// Compute pipelines for one combination of features.
 #[derive(Debug)]
@@ -21,6 +21,8 @@ pub struct Kernels {
     pub node: wgpu::ComputePipeline,
     /// Velocity boundaries (only for scenes that have them).
     pub boundary: Option<wgpu::ComputePipeline>,
+    /// Contact (only for scenes with contact or rigid walls).
+    pub contact: Option<wgpu::ComputePipeline>,
     /// First level of the sample sums.
     pub sum: wgpu::ComputePipeline,
     /// Second level of the sums, history row, time and flags.
@@ -29,7 +31,7 @@ pub struct Kernels {
 
 impl Kernels {
     /// Compiles the kernels a scene needs.
-    pub fn new(device: &wgpu::Device, features: Features, boundaries: bool) -> Self {
+    pub fn new(device: &wgpu::Device, features: Features, boundaries: bool, contact: bool) -> Self {
         Self {
             features,
             element: element::pipeline(device, features),
@@ -37,14 +39,16 @@ impl Kernels {
             control_dt: control::dt_pipeline(device, features),
             node: node::pipeline(device, features),
             boundary: boundaries.then(|| boundary::pipeline(device, features)),
+            contact: contact.then(|| contact::pipeline(device, features)),
             sum: reduce::sum_pipeline(device, features),
             control_end: control::end_pipeline(device, features),
         }
     }
 
     /// Every kernel source with its name, for validation.
-    pub fn sources() -> [(&'static str, &'static str); 5] {
+    pub fn sources() -> [(&'static str, &'static str); 6] {
         [
+            ("contact", contact::SOURCE),
             ("element", element::SOURCE),
             ("node", node::SOURCE),
             ("boundary", boundary::SOURCE),

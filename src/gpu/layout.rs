@@ -25,6 +25,8 @@ pub struct Params {
     pub n_instances: u32,
     pub sum_groups: u32,
     pub ticks_per_second: f32,
+    pub penalty_dt: f32,
+    pub _pad: [u32; 3],
 }
 
 /// Mirror of WGSL `Control`: the run state advanced on the GPU.
@@ -131,7 +133,7 @@ pub const NONE: u32 = u32::MAX;
 /// Most sum instances (bodies + 2) control.wgsl can hold.
 pub const MAX_INSTANCES: usize = 72;
 
-const _: () = assert!(std::mem::size_of::<Params>() == 64);
+const _: () = assert!(std::mem::size_of::<Params>() == 80);
 const _: () = assert!(std::mem::size_of::<Control>() == 80);
 const _: () = assert!(std::mem::size_of::<Instance>() == 32);
 const _: () = assert!(std::mem::size_of::<GpuBody>() == 64);

@@ -4,12 +4,14 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use crate::contact::ContactSample;
 use crate::error::{Error, Result};
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
 use crate::step::cpu::CpuSolver;
 use crate::step::{Counters, Event, Failure, Sample, Schedule, Snapshot, Solver};
 
+use super::contact::STATE_SEARCH;
 use super::context::GpuContext;
 use super::kernels::{Features, Kernels};
 use super::layout::*;
@@ -38,6 +40,8 @@ pub struct GpuSolver {
     dt_estimate: f64,
     counters: Counters,
     finished: bool,
+    /// Staging buffer of the node state for contact searches (created at the first search).
+    search_readback: Option<wgpu::Buffer>,
 }
 
 /// What failure messages need of the model.
@@ -45,6 +49,8 @@ pub struct GpuSolver {
 struct Names {
     bodies: Vec<(String, std::ops::Range<usize>, std::ops::Range<usize>)>,
     nodes: usize,
+    /// What sets the penalty springs' step, if any.
+    penalty: Option<String>,
 }
 
 impl Names {
@@ -93,13 +99,6 @@ impl GpuSolver {
         schedule: Schedule,
         fused: Option<bool>,
     ) -> Result<Self> {
-        if plan.has(Stage::Contact) {
-            return Err(Error::Gpu(
-                "contact and rigid walls run on the CPU backend only for now (`--backend cpu`); \
-                 the GPU contact kernels are not written yet"
-                    .to_string(),
-            ));
-        }
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -111,7 +110,12 @@ impl GpuSolver {
         };
         let device = &ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let kernels = Kernels::new(device, features, plan.has(Stage::VelocityBoundaries));
+        let kernels = Kernels::new(
+            device,
+            features,
+            plan.has(Stage::VelocityBoundaries),
+            plan.has(Stage::Contact),
+        );
         let state = GpuState::new(device, &kernels, model, plan, &schedule, fused);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
@@ -121,9 +125,10 @@ impl GpuSolver {
         }
         let state = state?;
         let history_bytes = 4 * (ROW_CAPACITY * state.params.row_stride) as u64;
+        let contact_bytes = state.contact.as_ref().map_or(0, |c| c.history.size());
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: 256 + history_bytes,
+            size: 256 + history_bytes + contact_bytes,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -148,6 +153,11 @@ impl GpuSolver {
                 .map(|b| (b.name.clone(), b.nodes.clone(), b.elements.clone()))
                 .collect(),
             nodes: model.node_count(),
+            penalty: state
+                .contact
+                .as_ref()
+                .and_then(|c| c.penalty_step())
+                .map(|(_, w)| w.to_string()),
         };
         Ok(Self {
             ctx,
@@ -162,6 +172,7 @@ impl GpuSolver {
             dt_estimate,
             counters: Counters::default(),
             finished: false,
+            search_readback: None,
         })
     }
 
@@ -228,6 +239,15 @@ impl GpuSolver {
             256,
             self.state.history.size(),
         );
+        if let Some(c) = &self.state.contact {
+            enc.copy_buffer_to_buffer(
+                &c.history,
+                0,
+                &self.readback,
+                256 + self.state.history.size(),
+                c.history.size(),
+            );
+        }
         self.ctx.queue.submit([enc.finish()]);
         self.counters.submissions += 1;
     }
@@ -252,7 +272,9 @@ impl GpuSolver {
         let bytes = self.map_read(&self.readback)?;
         self.counters.readbacks += 1;
         let ctrl: Control = bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<Control>()]);
-        let hist: &[u8] = &bytes[256..];
+        let hist_bytes = self.state.history.size() as usize;
+        let hist: &[u8] = &bytes[256..256 + hist_bytes];
+        let chist: &[u8] = &bytes[256 + hist_bytes..];
         let stride = self.state.params.row_stride as usize;
         let nb = self.names.bodies.len();
         let mut row_events = Vec::new();
@@ -276,6 +298,24 @@ impl GpuSolver {
                     .map(|b| [w(9 + 2 * b) as f64, w(10 + 2 * b) as f64])
                     .collect(),
             };
+            let mut sample = sample;
+            if let Some(c) = &self.state.contact {
+                let cs = c.params.hist_stride as usize;
+                let cb = (self.rows_read % ROW_CAPACITY) as usize * cs;
+                let r = |i: usize| -> f64 {
+                    let x: f32 =
+                        bytemuck::pod_read_unaligned(&chist[4 * (cb + i)..4 * (cb + i) + 4]);
+                    x as f64
+                };
+                sample.contact = r(0);
+                sample.contacts = (0..c.names.len())
+                    .map(|f| ContactSample {
+                        force: [r(1 + 4 * f), r(2 + 4 * f)],
+                        max_penetration: r(3 + 4 * f),
+                        active_nodes: r(4 + 4 * f) as u32,
+                    })
+                    .collect();
+            }
             row_events.push(Event::Sample(sample));
             self.rows_read += 1;
         }
@@ -283,6 +323,11 @@ impl GpuSolver {
             self.dt_estimate = ctrl.dt_next as f64;
         }
         self.ctrl = ctrl;
+        if ctrl.state == STATE_SEARCH {
+            self.contact_search()?;
+            events.extend(row_events);
+            return Ok(());
+        }
         let snapshot_done = ctrl.state == STATE_DONE && ctrl.flags & FLAG_SNAPSHOT != 0;
         if ctrl.state == STATE_PAUSED || snapshot_done {
             let (step, time) = if ctrl.state == STATE_PAUSED {
@@ -323,10 +368,13 @@ impl GpuSolver {
                         if i < self.names.nodes { self.names.node(i) } else { format!("node {i}") }
                     ),
                     3 => format!(
-                        "the fixed time_step {:e} exceeds the stable step {:e} of {}",
+                        "the fixed time_step {:e} exceeds the stable step {:e} of {}{}",
                         self.schedule.time_step.unwrap_or(0.0),
                         ctrl.fail_value,
-                        self.names.element(i)
+                        self.names.element(i),
+                        self.names.penalty.as_deref().map_or(String::new(), |w| format!(
+                            " and the penalty springs of {w}"
+                        ))
                     ),
                     4 => format!(
                         "the stable step collapsed to {:e} (first step {:e}) at {}",
@@ -347,6 +395,62 @@ impl GpuSolver {
                 }));
             }
             _ => {}
+        }
+        Ok(())
+    }
+
+    /// The contact kernel stopped the step for a search: reads the contact nodes' (u, v), searches
+    /// on the host, uploads the candidates and resumes the step from its contact stage.
+    fn contact_search(&mut self) -> Result<()> {
+        let device = &self.ctx.device;
+        let nodes_size = self.state.nodes.size();
+        let staging = self
+            .search_readback
+            .get_or_insert_with(|| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("search_readback"),
+                    size: nodes_size,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            })
+            .clone();
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("search_read"),
+        });
+        enc.copy_buffer_to_buffer(&self.state.nodes, 0, &staging, 0, nodes_size);
+        self.ctx.queue.submit([enc.finish()]);
+        let bytes = self.map_read(&staging)?;
+        self.counters.readbacks += 1;
+        let all: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+        let (Some(c), Some(p)) = (self.state.contact.as_mut(), self.kernels.contact.as_ref())
+        else {
+            return Err(Error::Gpu(
+                "search requested without contact buffers".into(),
+            ));
+        };
+        let uv: Vec<[f32; 4]> = c.nodes().iter().map(|&g| all[g as usize]).collect();
+        let last = self.ctrl.flags & FLAG_END != 0;
+        c.search(device, &self.ctx.queue, p, &uv, self.ctrl.dt_next, last);
+        self.ctx.queue.write_buffer(
+            &self.state.ctrl,
+            CONTROL_STATE_OFFSET,
+            bytemuck::bytes_of(&STATE_RUNNING),
+        );
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("searched step"),
+        });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("searched step"),
+                timestamp_writes: None,
+            });
+            self.state.record_tail(&self.kernels, &mut pass);
+        }
+        self.ctx.queue.submit([enc.finish()]);
+        self.counters.submissions += 1;
+        if let Some(c) = self.state.contact.as_mut() {
+            c.resume(&self.ctx.queue);
         }
         Ok(())
     }
@@ -544,6 +648,9 @@ impl Solver for GpuSolver {
     }
 
     fn counters(&self) -> Counters {
-        self.counters
+        Counters {
+            contact_searches: self.state.contact.as_ref().map_or(0, |c| c.searches),
+            ..self.counters
+        }
     }
 }

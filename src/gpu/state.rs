@@ -9,9 +9,11 @@ use crate::plan::{Plan, Stage};
 use crate::scene::{Formulation, HourglassForm, MaterialModel};
 use crate::step::Schedule;
 
+use super::contact::{ContactState, Shared};
 use super::kernels::Kernels;
 use super::layout::*;
 use super::{boundary, element, node, reduce};
+use crate::contact::ContactSet;
 
 /// Nodes + elements + constraints up to which a CPU adapter reduces in one workgroup.
 pub const FUSED_LIMIT: usize = 1 << 14;
@@ -34,6 +36,8 @@ pub struct GpuState {
     pub(crate) u_snap: Option<wgpu::Buffer>,
     pub(crate) history: wgpu::Buffer,
     pub(crate) indirect: wgpu::Buffer,
+    /// Contact buffers (scenes with contact only).
+    pub contact: Option<ContactState>,
     groups: Groups,
     bind: Binds,
 }
@@ -56,13 +60,18 @@ struct Binds {
     control_end: wgpu::BindGroup,
 }
 
-struct Alloc<'a> {
+pub(crate) struct Alloc<'a> {
     device: &'a wgpu::Device,
     list: Vec<(&'static str, u64)>,
 }
 
 impl Alloc<'_> {
-    fn init(&mut self, name: &'static str, data: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    pub(crate) fn init(
+        &mut self,
+        name: &'static str,
+        data: &[u8],
+        usage: wgpu::BufferUsages,
+    ) -> wgpu::Buffer {
         // Storage bindings may not be empty.
         let pad = [0u8; 16];
         let contents = if data.is_empty() { &pad[..] } else { data };
@@ -249,6 +258,11 @@ impl GpuState {
             fused.unwrap_or(kernels.features.reduce_group == 64 && nn + ne + nc <= FUSED_LIMIT);
         let sum_groups = if fused { 0 } else { first };
 
+        let contact_set = if plan.has(Stage::Contact) {
+            ContactSet::new(model)
+        } else {
+            None
+        };
         let has_fields = plan.has(Stage::Fields);
         let mut times = time_table(schedule.history_interval, schedule.end_time);
         let n_sample_times = times.len() as u32;
@@ -277,6 +291,11 @@ impl GpuState {
             n_instances: instances.len() as u32,
             sum_groups,
             ticks_per_second: (TICKS_PER_END / schedule.end_time) as f32,
+            penalty_dt: contact_set
+                .as_ref()
+                .and_then(|c| c.penalty_step())
+                .map_or(0.0, |(d, _)| d as f32),
+            _pad: [0; 3],
         };
         let control = Control {
             flags: FLAG_SAMPLE
@@ -346,6 +365,24 @@ impl GpuState {
             bytemuck::cast_slice(&indirect_init),
             storage | U::INDIRECT,
         );
+
+        let contact = match (contact_set, &kernels.contact) {
+            (Some(set), Some(p)) => Some(ContactState::new(
+                device,
+                p,
+                model,
+                set,
+                Shared {
+                    ctrl: &ctrl,
+                    nodes: &nodes,
+                    v_prev: &v_prev,
+                    sample_src: &sample_src,
+                },
+                ROW_CAPACITY,
+                &mut a,
+            )),
+            _ => None,
+        };
 
         // Bind groups, once.
         let mut el: Vec<(u32, &wgpu::Buffer)> = vec![
@@ -449,6 +486,7 @@ impl GpuState {
             u_snap,
             history,
             indirect,
+            contact,
             groups: Groups {
                 element: (ne as u32).div_ceil(element::WORKGROUP),
                 node: (nn as u32).div_ceil(node::WORKGROUP),
@@ -479,6 +517,18 @@ impl GpuState {
             pass.set_pipeline(p);
             pass.set_bind_group(0, bg, &[]);
             pass.dispatch_workgroups(self.groups.boundary, 1, 1);
+        }
+        self.record_tail(kernels, pass);
+    }
+
+    /// Records the end of a step from the contact stage on: contact, sample sums, control.
+    /// (After a search stopped a step in its contact stage, the host resumes it with this.)
+    pub fn record_tail(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
+        let b = &self.bind;
+        if let (Some(p), Some(c)) = (&kernels.contact, &self.contact) {
+            pass.set_pipeline(p);
+            pass.set_bind_group(0, &c.bind, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
         }
         if self.params.sum_groups > 0 {
             pass.set_pipeline(&kernels.sum);

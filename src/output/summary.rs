@@ -37,6 +37,9 @@ pub struct Summary {
     pub gpu_submissions: u64,
     /// Readbacks from the GPU (0 on the CPU).
     pub gpu_readbacks: u64,
+    /// Contact broad-phase searches (0 without contact): one every step means the nodes move
+    /// more than half the search margin per step.
+    pub contact_searches: u64,
     /// Seconds per stage where the backend measures them.
     pub stage_seconds: Vec<(String, f64)>,
     /// History rows written.

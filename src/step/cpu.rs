@@ -424,6 +424,13 @@ impl CpuSolver {
 }
 
 impl Solver for CpuSolver {
+    fn counters(&self) -> crate::step::Counters {
+        crate::step::Counters {
+            contact_searches: self.contact.as_ref().map_or(0, |c| c.searches()),
+            ..Default::default()
+        }
+    }
+
     fn advance(&mut self, events: &mut Vec<Event>) -> Result<()> {
         let start = events.len();
         while !self.done && events.len() == start {

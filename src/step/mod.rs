@@ -171,6 +171,8 @@ pub struct Counters {
     pub submissions: u64,
     /// Readbacks from the device (GPU).
     pub readbacks: u64,
+    /// Contact broad-phase searches (0 without contact).
+    pub contact_searches: u64,
 }
 
 /// A time integrator of a model: the CPU reference or the GPU backend.

@@ -1,0 +1,322 @@
+//! Contact on the GPU (lavapipe in CI) against the same references as the CPU contact tests
+//! (`tests/core/contact.rs`), and against the CPU reference run of the same scene: rods, rod on a
+//! wall, impedance ratio 1e4, penalty, the corner-first square, the disk on a wall; the same
+//! contact scene twice gives the same bits.
+
+use std::sync::Arc;
+
+use ricochet::gpu::{GpuContext, GpuSolver};
+use ricochet::model::Model;
+use ricochet::run::{run, schedule, RunResult};
+use ricochet::step::cpu::CpuSolver;
+use ricochet::step::Sample;
+
+use crate::{context, load, GPU_LOCK};
+
+#[path = "../shared/contact_scenes.rs"]
+mod scenes;
+use scenes::*;
+
+fn run_on(ctx: Option<Arc<GpuContext>>, text: &str, name: &str) -> (RunResult, Model) {
+    let (scene, model, plan) = load(text, name);
+    let dir = std::env::temp_dir().join(format!(
+        "ricochet-gpu-contact-{}-{name}-{}",
+        std::process::id(),
+        ctx.is_some()
+    ));
+    let r = match ctx {
+        Some(ctx) => {
+            let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
+            run(&scene, &model, &plan, &mut gpu, &dir, None).expect("gpu run")
+        }
+        None => {
+            let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
+            run(&scene, &model, &plan, &mut cpu, &dir, None).expect("cpu run")
+        }
+    };
+    let _ = std::fs::remove_dir_all(&dir);
+    (r, model)
+}
+
+fn rows(r: &RunResult) -> Vec<Sample> {
+    r.samples.iter().map(|s| s.0.clone()).collect()
+}
+
+/// Largest difference between the CPU and GPU runs' body velocities (relative to `v`) and energies
+/// including the contact's (relative to `e0`), over rows at the same step.
+fn agreement(cpu: &[Sample], gpu: &[Sample], v: f64, e0: f64) -> (f64, f64) {
+    let (mut dv, mut de) = (0.0f64, 0.0f64);
+    for (a, b) in cpu.iter().zip(gpu) {
+        if a.step != b.step {
+            continue;
+        }
+        for (x, y) in a.body_velocity.iter().zip(&b.body_velocity) {
+            dv = dv.max((x[0] - y[0]).abs().max((x[1] - y[1]).abs()) / v);
+        }
+        for (x, y) in [
+            (a.kinetic, b.kinetic),
+            (a.internal, b.internal),
+            (a.contact, b.contact),
+        ] {
+            de = de.max((x - y).abs() / e0);
+        }
+    }
+    (dv, de)
+}
+
+#[test]
+fn gpu_rods_and_rod_on_wall_match_the_wave_solution_and_the_cpu() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let c = bar_speed();
+    for (target, label) in [(Some(1.0), "rods"), (None, "rod on wall")] {
+        let force = match target {
+            Some(_) => 0.5 * 7850.0 * c * A * V0,
+            None => 7850.0 * c * A * V0,
+        };
+        let mut losses = Vec::new();
+        for n in [20usize, 40, 80] {
+            let text = rod_scene(n, target, "lagrange", "", 1.5);
+            let (rg, model) = run_on(Some(ctx.clone()), &text, "rods");
+            let (rc, _) = run_on(None, &text, "rods");
+            assert_eq!(rg.summary.status, "completed", "{}", rg.summary.message);
+            let (g, cs) = (rows(&rg), rows(&rc));
+            let dt = 0.9 * (L / n as f64) / c;
+            let (steps, chatter, plateau) = contact_window(&rg.samples);
+            let exact_steps = 2.0 * L / c / dt;
+            let last = g.last().unwrap();
+            let e0 = 0.5 * model.bodies[0].mass * V0 * V0;
+            let p0 = model.bodies[0].mass * V0;
+            let dp = (momentum(&model, last) - p0).abs() / p0;
+            let loss = last.contact / e0;
+            let expected = if target.is_some() { 0.25 } else { 0.5 } / n as f64;
+            let (dv, de) = agreement(&cs, &g, V0, e0);
+            eprintln!(
+                "gpu {label} n = {n}: contact {steps} steps ({exact_steps:.2}), chatter {chatter}, \
+                 plateau {:+.2e}, momentum {dp:.1e}, loss {loss:.6} (exact {expected:.6}, {:+.1e}), \
+                 CPU-GPU velocity {dv:.1e} v0, energy {de:.1e} E0, searches {}",
+                plateau / force - 1.0,
+                loss / expected - 1.0,
+                rg.summary.contact_searches
+            );
+            assert!((steps as f64 - exact_steps).abs() <= 2.0);
+            assert_eq!(chatter, 0);
+            assert!((plateau / force - 1.0).abs() < 5e-3, "plateau {plateau}");
+            if target.is_some() {
+                assert!(dp < 1e-6, "momentum {dp:e}");
+            }
+            assert!((loss / expected - 1.0).abs() < 1e-3, "loss {loss}");
+            assert!(dv < 1e-5 && de < 1e-5, "CPU and GPU differ: {dv:e} {de:e}");
+            losses.push(loss);
+        }
+        assert!(
+            (losses[0] / losses[1] - 2.0).abs() < 1e-2
+                && (losses[1] / losses[2] - 2.0).abs() < 1e-2
+        );
+    }
+}
+
+#[test]
+fn gpu_rod_against_a_target_of_1e4_times_its_area_matches_the_mismatch_formula() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text = rod_scene(40, Some(1e4), "lagrange", "", 1.5);
+    let (r, model) = run_on(Some(ctx), &text, "mismatch");
+    let last = rows(&r).pop().unwrap();
+    let v1 = last.body_velocity[0][0];
+    let exact = (1.0 - 1e4) / (1.0 + 1e4) * V0;
+    let p0 = model.bodies[0].mass * V0;
+    let dp = (momentum(&model, &last) - p0).abs() / p0;
+    eprintln!("gpu impedance ratio 1e4: striker leaves at {v1:.5} m/s (formula {exact:.5}), momentum {dp:.1e}");
+    assert!((v1 - exact).abs() / V0 < 0.02);
+    assert!(dp < 1e-6);
+}
+
+#[test]
+fn gpu_penalty_keeps_the_restitution_and_a_stiff_penalty_shortens_the_step() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    // omega dt = 0.3 as in the CPU test.
+    let n = 80;
+    let h = L / n as f64;
+    let t = A / h;
+    let dt = 0.9 * h / bar_speed();
+    let m_node = 7850.0 * h * h * t / 4.0;
+    let k = (0.3 / dt) * (0.3 / dt) * m_node;
+    let s = k / (210e9 * t / 2.0);
+    let text = rod_scene(
+        n,
+        Some(1.0),
+        "penalty",
+        &format!("penalty_scale = {s:e}"),
+        2.0,
+    );
+    let (r, _) = run_on(Some(ctx.clone()), &text, "penalty");
+    let last = rows(&r).pop().unwrap();
+    let e = (last.body_velocity[1][0] - last.body_velocity[0][0]) / V0;
+    let (lag, _) = run_on(
+        Some(ctx.clone()),
+        &rod_scene(n, Some(1.0), "lagrange", "", 2.0),
+        "penalty_lagrange",
+    );
+    let ll = rows(&lag).pop().unwrap();
+    let e_lagrange = (ll.body_velocity[1][0] - ll.body_velocity[0][0]) / V0;
+    let (rc, _) = run_on(None, &text, "penalty");
+    let lc = rows(&rc).pop().unwrap();
+    let e_cpu = (lc.body_velocity[1][0] - lc.body_velocity[0][0]) / V0;
+    eprintln!("gpu penalty omega dt = 0.3: restitution {e:.5} (GPU Lagrange {e_lagrange:.5}, CPU penalty {e_cpu:.5})");
+    assert!((e - e_lagrange).abs() < 0.01);
+    assert!((e - e_cpu).abs() < 1e-4);
+    // 100 x too stiff, variable step: the step shrinks and no energy is gained.
+    let stiff = rod_scene(20, Some(1.0), "penalty", "penalty_scale = 10.0", 2.0)
+        .replace("time_step = ", "# time_step = ");
+    let (r, model) = run_on(Some(ctx.clone()), &stiff, "stiff");
+    let (rc, _) = run_on(None, &stiff, "stiff");
+    let last = rows(&r).pop().unwrap();
+    let e_end =
+        (last.kinetic + last.internal + last.hourglass) / (0.5 * model.bodies[0].mass * V0 * V0);
+    eprintln!(
+        "gpu penalty x100: E_end/E0 {e_end:.5}, dt {:.4e} (CPU {:.4e})",
+        r.summary.dt_max, rc.summary.dt_max
+    );
+    assert!(e_end <= 1.01);
+    assert!((r.summary.dt_max / rc.summary.dt_max - 1.0).abs() < 1e-5);
+    // A fixed step above the penalty's limit stops with a diagnostic.
+    let fixed = rod_scene(20, Some(1.0), "penalty", "penalty_scale = 10.0", 2.0);
+    let (scene, model, plan) = load(&fixed, "stiff_fixed");
+    let dir = std::env::temp_dir().join(format!("ricochet-gpu-stiff-{}", std::process::id()));
+    let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
+    let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("run");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(r.summary.status, "failed");
+    assert!(
+        r.summary.message.contains("exceeds the stable step")
+            && r.summary
+                .message
+                .contains("penalty springs of contact \"striker-target\""),
+        "{}",
+        r.summary.message
+    );
+}
+
+#[test]
+fn gpu_square_hitting_a_wall_corner_first_neither_turns_nor_drifts_sideways() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for method in ["lagrange", "penalty"] {
+        let (r, model) = run_on(
+            Some(ctx.clone()),
+            &diamond_scene(8, 0.02, 0.0, -5.0, method),
+            "diamond",
+        );
+        let g = rows(&r);
+        let worst = g
+            .iter()
+            .map(|s| s.body_velocity[0][0].abs())
+            .fold(0.0, f64::max);
+        let hits = g.iter().filter(|s| s.contacts[0].active_nodes > 0).count();
+        let last = g.last().unwrap();
+        eprintln!(
+            "gpu diamond ({method}): {hits} rows in contact, worst |vx| / v0 {:.2e}, final vy {:.4}",
+            worst / 5.0,
+            last.body_velocity[0][1]
+        );
+        assert!(hits > 0);
+        assert!(worst * model.bodies[0].mass < 1e-6 * model.bodies[0].mass * 5.0);
+        assert!(last.body_velocity[0][1] > 0.0);
+    }
+}
+
+#[test]
+fn gpu_elastic_disk_on_a_rigid_wall_matches_the_references_and_the_cpu() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for (v0, time, force, restitution) in DISK_CASES {
+        let (r, model) = run_on(Some(ctx.clone()), &disk_text(v0), "disk");
+        let (rc, _) = run_on(None, &disk_text(v0), "disk");
+        let mass = model.bodies[0].mass;
+        let (duration, peak, e, drift) = disk_metrics(&rows(&r), mass, v0);
+        let (dc, pc, ec, _) = disk_metrics(&rows(&rc), mass, v0);
+        let (dv, de) = agreement(&rows(&rc), &rows(&r), v0, 0.5 * mass * v0 * v0);
+        eprintln!(
+            "gpu disk on wall at {v0} m/s: contact {:.2} us ({:+.2} %; CPU {:.2}), peak {:.3} MN/m \
+             ({:+.2} %; CPU {:.3}), restitution {e:.4} (CPU {ec:.4}, reference {restitution}), \
+             energy drift {drift:.2e}, CPU-GPU velocity {dv:.1e} v0, energy {de:.1e} E0, searches {}",
+            duration * 1e6,
+            100.0 * (duration / time - 1.0),
+            dc * 1e6,
+            peak * 1e-6,
+            100.0 * (peak / force - 1.0),
+            pc * 1e-6,
+            r.summary.contact_searches
+        );
+        assert!((duration / time - 1.0).abs() < 0.03);
+        assert!((peak / force - 1.0).abs() < 0.05);
+        assert!((e - restitution).abs() < 0.01);
+        assert!(drift < 5e-3);
+        assert!((peak / pc - 1.0).abs() < 1e-3 && (e - ec).abs() < 1e-4);
+    }
+}
+
+#[test]
+fn gpu_contact_runs_are_bit_identical_run_to_run() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for (name, text) in [
+        ("rods", rod_scene(20, Some(1.0), "lagrange", "", 1.5)),
+        ("diamond", diamond_scene(8, 0.02, 0.0, -5.0, "penalty")),
+        (
+            "disk",
+            disk_text(10.0).replace("end_time = 1.6e-4", "end_time = 4.0e-5"),
+        ),
+    ] {
+        let (scene, model, plan) = load(&text, name);
+        let mut outs = Vec::new();
+        for k in 0..2 {
+            let dir = std::env::temp_dir().join(format!(
+                "ricochet-gpu-det-{}-{name}-{k}",
+                std::process::id()
+            ));
+            let mut gpu =
+                GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu solver");
+            let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("run");
+            assert_eq!(r.summary.status, "completed");
+            let (u, v) = gpu.nodes().expect("nodes");
+            let history = std::fs::read(dir.join("history.csv")).expect("history");
+            let _ = std::fs::remove_dir_all(&dir);
+            let bits: Vec<u64> = u
+                .iter()
+                .chain(&v)
+                .flat_map(|p| [p[0].to_bits(), p[1].to_bits()])
+                .collect();
+            outs.push((bits, history));
+        }
+        assert_eq!(
+            outs[0].0, outs[1].0,
+            "{name}: node state differs between runs"
+        );
+        assert_eq!(
+            outs[0].1, outs[1].1,
+            "{name}: history.csv differs between runs"
+        );
+    }
+}
+
+#[test]
+fn gpu_allocates_contact_buffers_and_kernel_only_for_contact_scenes() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let with = rod_scene(20, None, "lagrange", "", 1.5);
+    // The same rod without the wall.
+    let cut = with.find("[[rigid_wall]]").expect("wall section");
+    let without = &with[..cut];
+    for (text, contact) in [(with.as_str(), true), (without, false)] {
+        let (scene, model, plan) = load(text, "plan");
+        let gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu solver");
+        let names: Vec<&str> = gpu.state().allocated.iter().map(|(n, _)| *n).collect();
+        let has = names.iter().any(|n| n.starts_with("contact"));
+        assert_eq!(has, contact, "contact buffers: {names:?}");
+        assert_eq!(gpu.kernels().contact.is_some(), contact);
+        assert_eq!(gpu.state().contact.is_some(), contact);
+    }
+}

@@ -1,0 +1,212 @@
+//! Contact scenes and measurements shared by the CPU (`tests/core/contact.rs`) and GPU
+//! (`tests/gpu/contact.rs`) contact tests: REFERENCES.md sections 1 and 5 and the corner-first square.
+#![allow(dead_code)]
+
+use ricochet::model::Model;
+use ricochet::step::Sample;
+
+/// Steel: Young's modulus (Pa) and density (kg/m^3).
+const E_STEEL: f64 = 210e9;
+const RHO_STEEL: f64 = 7850.0;
+
+pub const A: f64 = 1e-4; // rod cross-section (m^2): height h (one square element) x thickness A / h
+pub const L: f64 = 1.0; // rod length (m)
+pub const V0: f64 = 10.0;
+
+pub fn bar_speed() -> f64 {
+    (E_STEEL / RHO_STEEL).sqrt()
+}
+
+/// Two rods (or one rod and a wall) of n square plane-stress elements at 1D Courant number 0.9,
+/// touching at t = 0, one history row per step. `target` is the target's area relative to the
+/// striker's (None: a rigid wall at x = 0 instead).
+pub fn rod_scene(
+    n: usize,
+    target: Option<f64>,
+    method: &str,
+    extra: &str,
+    end_factor: f64,
+) -> String {
+    let h = L / n as f64;
+    let t = A / h;
+    let dt = 0.9 * h / bar_speed();
+    let end = end_factor * 2.0 * L / bar_speed();
+    let mut s = format!(
+        r#"
+[run]
+end_time = {end:e}
+time_step = {dt:e}
+history_interval = {dt:e}
+bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
+
+[[material]]
+name = "steel"
+model = "linear_elastic"
+density = 7850.0
+youngs_modulus = 2.1e11
+poisson_ratio = 0.0
+
+[[body]]
+name = "striker"
+material = "steel"
+formulation = "plane_stress"
+thickness = {t:e}
+mesh = {{ rectangle = {{ origin = [-{L}, 0.0], size = [{L}, {h:e}], cells = [{n}, 1] }} }}
+initial_velocity = [{V0}, 0.0]
+hourglass = {{ form = "stiffness", coefficient = 0.1 }}
+"#
+    );
+    match target {
+        Some(ratio) => s.push_str(&format!(
+            r#"
+[[body]]
+name = "target"
+material = "steel"
+formulation = "plane_stress"
+thickness = {t2:e}
+mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [{L}, {h:e}], cells = [{n}, 1] }} }}
+hourglass = {{ form = "stiffness", coefficient = 0.1 }}
+
+[[contact]]
+bodies = ["striker", "target"]
+method = "{method}"
+{extra}
+"#,
+            t2 = ratio * t
+        )),
+        None => s.push_str(&format!(
+            r#"
+[[rigid_wall]]
+point = [0.0, 0.0]
+normal = [-1.0, 0.0]
+method = "{method}"
+{extra}
+"#
+        )),
+    }
+    s
+}
+
+/// Contact duration in steps (first to last step with a force, inclusive), the steps without
+/// force inside it (chatter) and the median force over it.
+pub fn contact_window(samples: &[(Sample, f64)]) -> (usize, usize, f64) {
+    let f: Vec<f64> = samples
+        .iter()
+        .map(|(s, _)| s.contacts[0].force[0])
+        .collect();
+    let first = f.iter().position(|x| *x != 0.0).expect("a contact force");
+    let last = f.iter().rposition(|x| *x != 0.0).expect("a contact force");
+    let chatter = f[first..=last].iter().filter(|x| **x == 0.0).count();
+    let mut inside: Vec<f64> = f[first..=last].iter().map(|x| x.abs()).collect();
+    inside.sort_by(f64::total_cmp);
+    (last - first + 1, chatter, inside[inside.len() / 2])
+}
+
+pub fn momentum(model: &Model, s: &Sample) -> f64 {
+    model
+        .bodies
+        .iter()
+        .zip(&s.body_velocity)
+        .map(|(b, v)| b.mass * v[0])
+        .sum()
+}
+
+/// A square of `cells` x `cells` elements and side `side`, turned by 45 degrees, its lowest corner
+/// at (0, gap), falling at `v` onto a wall y = 0.
+pub fn diamond_scene(cells: usize, side: f64, gap: f64, v: f64, method: &str) -> String {
+    let c = std::f64::consts::FRAC_1_SQRT_2;
+    let mut nodes = Vec::new();
+    for j in 0..=cells {
+        for i in 0..=cells {
+            let (x, y) = (
+                side * i as f64 / cells as f64,
+                side * j as f64 / cells as f64,
+            );
+            // Rotate by 45 degrees about the origin: corner (0, 0) stays the lowest.
+            nodes.push(format!("[{:e}, {:e}]", c * (x - y), c * (x + y) + gap));
+        }
+    }
+    let mut quads = Vec::new();
+    for j in 0..cells {
+        for i in 0..cells {
+            let a = j * (cells + 1) + i;
+            quads.push(format!(
+                "[{}, {}, {}, {}]",
+                a,
+                a + 1,
+                a + cells + 2,
+                a + cells + 1
+            ));
+        }
+    }
+    let dt = 0.5 * side / cells as f64 / 6000.0;
+    format!(
+        r#"
+[run]
+end_time = {end:e}
+history_interval = {dt:e}
+bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
+
+[[material]]
+name = "steel"
+model = "linear_elastic"
+density = 7850.0
+youngs_modulus = 2.1e11
+poisson_ratio = 0.3
+
+[[body]]
+name = "square"
+material = "steel"
+mesh = {{ nodes = [{nodes}], quads = [{quads}] }}
+initial_velocity = [0.0, {v}]
+hourglass = {{ form = "stiffness", coefficient = 0.1 }}
+
+[[rigid_wall]]
+point = [0.0, 0.0]
+normal = [0.0, 1.0]
+method = "{method}"
+"#,
+        end = 8.0 * side / 5000.0,
+        nodes = nodes.join(", "),
+        quads = quads.join(", "),
+    )
+}
+
+/// The disk-on-a-wall asset at speed `v0`.
+pub fn disk_text(v0: f64) -> String {
+    std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/disk_wall.toml"
+    ))
+    .expect("read assets/disk_wall.toml")
+    .replace(
+        "initial_velocity = [1.0, 0.0]",
+        &format!("initial_velocity = [{v0:e}, 0.0]"),
+    )
+}
+
+/// Contact time, peak force (N/m), centre-of-mass restitution and the largest total-energy drift
+/// relative to E0 = M v0^2 / 2 of a disk-on-wall run's samples.
+pub fn disk_metrics(samples: &[Sample], mass: f64, v0: f64) -> (f64, f64, f64, f64) {
+    let e0 = 0.5 * mass * v0 * v0;
+    let f: Vec<f64> = samples.iter().map(|s| s.contacts[0].force[0]).collect();
+    let first = f.iter().position(|x| *x != 0.0).expect("contact");
+    let last = f.iter().rposition(|x| *x != 0.0).expect("contact");
+    // Rows are history intervals ending at their time: the contact spans from the start of the
+    // first row with a force to the end of the last.
+    let interval = samples[1].time - samples[0].time;
+    let duration = samples[last].time - samples[first].time + interval;
+    let peak = f.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let e = -samples.last().expect("rows").body_velocity[0][0] / v0;
+    let drift = samples
+        .iter()
+        .map(|s| ((s.kinetic + s.internal + s.hourglass) / e0 - 1.0).abs())
+        .fold(0.0, f64::max);
+    (duration, peak, e, drift)
+}
+
+/// REFERENCES.md section 5: (v0, contact time, peak force, restitution).
+pub const DISK_CASES: [(f64, f64, f64, f64); 2] = [
+    (1.0, 89.5e-6, 2.25e6, 0.992),
+    (10.0, 77.1e-6, 26.5e6, 0.980),
+];
