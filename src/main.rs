@@ -349,12 +349,15 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             ),
             None => println!("  lagrange no effect on the stable step"),
         }
-        let overlaps = c.initial_overlaps(model);
+        let overlaps = &model.initial_overlaps;
         if overlaps.is_empty() {
             println!("  overlaps none at t = 0");
         }
-        for (name, node, depth) in overlaps.iter().take(20) {
-            println!("  overlap  {name}: node {node} penetrates {depth:.4e} m at t = 0");
+        for o in overlaps.iter().take(20) {
+            println!(
+                "  overlap  {}: node {} penetrated {:.4e} m at t = 0; moved onto the surface (no strain)",
+                o.interface, o.node, o.depth
+            );
         }
         if overlaps.len() > 20 {
             println!("  overlap  ... {} in all", overlaps.len());

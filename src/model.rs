@@ -5,6 +5,7 @@
 
 use std::ops::Range;
 
+use crate::contact::{ContactSet, Overlap};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::scene::{self, Scene};
@@ -49,6 +50,8 @@ pub struct Model {
     pub quads: Vec<[u32; 4]>,
     /// Reference corner coordinates of each element relative to the element's centre.
     pub corners: Vec<[[f64; 2]; 4]>,
+    /// Slave nodes that started behind a contact surface or wall and were moved onto it.
+    pub initial_overlaps: Vec<Overlap>,
     /// Body of each element.
     pub element_body: Vec<u32>,
     /// Bodies.
@@ -80,6 +83,7 @@ impl Model {
             constraints: Vec::new(),
             contacts: scene.contacts.clone(),
             walls: scene.walls.clone(),
+            initial_overlaps: Vec::new(),
         };
         for (bi, body) in scene.bodies.iter().enumerate() {
             let mesh = Mesh::generate(&body.mesh);
@@ -198,7 +202,67 @@ impl Model {
                 v[1] = y;
             }
         }
+        m.remove_initial_overlaps(scene)?;
         Ok(m)
+    }
+
+    /// Moves slave nodes that start behind a contact surface or a wall onto it, in the reference
+    /// configuration (so without strain, and so without energy), and records what was moved in
+    /// [`Model::initial_overlaps`]. Touching bodies at rest then stay at rest. Nodal masses are
+    /// kept (the moves are small against the elements).
+    fn remove_initial_overlaps(&mut self, scene: &Scene) -> Result<()> {
+        if !self.has_contact() {
+            return Ok(());
+        }
+        // Moving one body's nodes can uncover another's (two-pass): a few rounds.
+        for _ in 0..4 {
+            let Some(mut set) = ContactSet::new(self) else {
+                return Ok(());
+            };
+            let found = set.initial_overlaps(self);
+            if found.is_empty() {
+                return Ok(());
+            }
+            // Walls, and one contact pass per round: the reverse pass of a two-pass contact
+            // then finds its nodes on the moved surface instead of moving them apart again.
+            let first_pass = found.iter().filter_map(|o| o.pass).min();
+            let found: Vec<Overlap> = found
+                .into_iter()
+                .filter(|o| o.pass.is_none() || o.pass == first_pass)
+                .collect();
+            let mut moved = vec![false; self.position.len()];
+            for o in &found {
+                let i = o.node as usize;
+                if moved[i] {
+                    continue;
+                }
+                moved[i] = true;
+                let p = &mut self.position[i];
+                p[0] += o.depth * o.normal[0];
+                p[1] += o.depth * o.normal[1];
+            }
+            for (e, q) in self.quads.iter().enumerate() {
+                if !q.iter().any(|&n| moved[n as usize]) {
+                    continue;
+                }
+                let x = q.map(|n| self.position[n as usize]);
+                let g = quad_geometry(&x);
+                if !(g.area > 0.0 && min_corner_ratio(&x, g.area) > 1e-8) {
+                    let b = self.element_body[e] as usize;
+                    return Err(scene::invalid(
+                        scene,
+                        format!("body[{b}].mesh"),
+                        format!("element {}", e - self.bodies[b].elements.start),
+                        "moving the nodes that overlap a contact surface at t = 0 onto it inverts this element: separate the bodies",
+                    ));
+                }
+                let cx = 0.25 * (x[0][0] + x[1][0] + x[2][0] + x[3][0]);
+                let cy = 0.25 * (x[0][1] + x[1][1] + x[2][1] + x[3][1]);
+                self.corners[e] = x.map(|p| [p[0] - cx, p[1] - cy]);
+            }
+            self.initial_overlaps.extend(found);
+        }
+        Ok(())
     }
 
     /// Number of nodes.

@@ -113,6 +113,21 @@ struct Constraint {
     penetration: f64,
 }
 
+/// A slave node behind a master surface or a wall at t = 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Overlap {
+    /// Contact or wall name.
+    pub interface: String,
+    /// Global node index.
+    pub node: u32,
+    /// Penetration depth (m).
+    pub depth: f64,
+    /// Unit normal of the surface it is behind (moving the node by `depth` along it removes it).
+    pub normal: [f64; 2],
+    /// The contact pass that found it (`None` for a wall).
+    pub pass: Option<usize>,
+}
+
 /// Result of the contact step.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct StepWork {
@@ -406,36 +421,41 @@ impl ContactSet {
         }
     }
 
-    /// Slave nodes that penetrate a master segment or a wall in the reference configuration:
-    /// (interface name, global node, penetration).
-    pub fn initial_overlaps(&mut self, model: &Model) -> Vec<(String, u32, f64)> {
+    /// Slave nodes that penetrate a master segment or a wall in the reference configuration.
+    pub fn initial_overlaps(&mut self, model: &Model) -> Vec<Overlap> {
         let u = vec![[0.0; 2]; model.node_count()];
         let v = u.clone();
         self.positions(model, &u, &v, 0.0);
         self.search();
         let mut out = Vec::new();
-        for p in &self.passes {
+        for (pi, p) in self.passes.iter().enumerate() {
             let mut k = 0;
             while k < p.candidates.len() {
                 let si = p.candidates[k].0;
                 let s = p.slaves[si as usize];
-                let mut worst: Option<f64> = None;
+                // The closest surface the node is behind.
+                let mut worst: Option<(f64, [f64; 2])> = None;
                 while k < p.candidates.len() && p.candidates[k].0 == si {
                     let [a, b] = p.segments[p.candidates[k].1 as usize];
                     let x = &self.x_n;
                     if let Some(pr) = project(x[s as usize], x[a as usize], x[b as usize]) {
-                        if pr.gap < 0.0 && pr.gap > -0.5 * pr.length {
-                            worst = Some(worst.map_or(pr.gap, |w: f64| w.max(pr.gap)));
+                        if pr.gap < 0.0
+                            && pr.gap > -0.5 * pr.length
+                            && worst.is_none_or(|w| pr.gap > w.0)
+                        {
+                            worst = Some((pr.gap, pr.normal));
                         }
                     }
                     k += 1;
                 }
-                if let Some(g) = worst {
-                    out.push((
-                        self.interfaces[p.interface].name.clone(),
-                        self.nodes[s as usize],
-                        -g,
-                    ));
+                if let Some((g, normal)) = worst {
+                    out.push(Overlap {
+                        interface: self.interfaces[p.interface].name.clone(),
+                        node: self.nodes[s as usize],
+                        depth: -g,
+                        normal,
+                        pass: Some(pi),
+                    });
                 }
             }
         }
@@ -443,11 +463,13 @@ impl ContactSet {
             for &l in &w.nodes {
                 let g = dot(sub(self.x_n[l as usize], w.point), w.normal);
                 if g < 0.0 {
-                    out.push((
-                        self.interfaces[w.interface].name.clone(),
-                        self.nodes[l as usize],
-                        -g,
-                    ));
+                    out.push(Overlap {
+                        interface: self.interfaces[w.interface].name.clone(),
+                        node: self.nodes[l as usize],
+                        depth: -g,
+                        normal: w.normal,
+                        pass: None,
+                    });
                 }
             }
         }

@@ -355,3 +355,83 @@ fn elastic_disk_on_a_rigid_wall_matches_the_contact_time_peak_force_and_restitut
         assert!(drift < 5e-3, "energy drift {drift}");
     }
 }
+
+/// Two stacked blocks whose meshes overlap by `overlap` (non-matching: 4 and 3 cells along x)
+/// and a wall the lower block's bottom starts `overlap` behind, at rest.
+fn overlapping_blocks(overlap: f64, method: &str) -> String {
+    format!(
+        r#"
+[run]
+end_time = 2.0e-5
+history_interval = 1.0e-6
+bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
+
+[[material]]
+name = "steel"
+model = "linear_elastic"
+density = 7850.0
+youngs_modulus = 2.1e11
+poisson_ratio = 0.3
+
+[[body]]
+name = "lower"
+material = "steel"
+mesh = {{ rectangle = {{ origin = [0.0, {y0:e}], size = [0.01, 0.005], cells = [4, 2] }} }}
+hourglass = {{ form = "stiffness", coefficient = 0.1 }}
+
+[[body]]
+name = "upper"
+material = "steel"
+mesh = {{ rectangle = {{ origin = [0.0, {y1:e}], size = [0.01, 0.005], cells = [3, 2] }} }}
+hourglass = {{ form = "stiffness", coefficient = 0.1 }}
+
+[[contact]]
+bodies = ["upper", "lower"]
+method = "{method}"
+
+[[rigid_wall]]
+point = [0.0, 0.0]
+normal = [0.0, 1.0]
+bodies = ["lower"]
+method = "{method}"
+"#,
+        y0 = -overlap,
+        y1 = 0.005 - 2.0 * overlap,
+    )
+}
+
+#[test]
+fn bodies_overlapping_at_t0_are_moved_apart_without_strain_and_stay_at_rest() {
+    for method in ["lagrange", "penalty"] {
+        let text = overlapping_blocks(2e-5, method);
+        let (_, model, _) = build(&text);
+        let moved = &model.initial_overlaps;
+        let worst = moved.iter().map(|o| o.depth).fold(0.0, f64::max);
+        eprintln!(
+            "overlap ({method}): {} nodes moved, deepest {worst:.2e} m",
+            moved.len()
+        );
+        // The lower block's bottom nodes (wall) and the upper block's bottom nodes (contact).
+        assert!(
+            moved.iter().any(|o| o.interface == "lower"),
+            "wall overlaps"
+        );
+        assert!(
+            moved.iter().any(|o| o.interface == "upper-lower"),
+            "contact overlaps"
+        );
+        assert!((worst - 2e-5).abs() < 1e-12);
+        let mut again = ricochet::contact::ContactSet::new(&model).expect("contact");
+        assert!(again.initial_overlaps(&model).is_empty(), "overlaps left");
+        let (r, _) = run_text(&text, "overlap");
+        let mut peak: f64 = 0.0;
+        for (s, _) in &r.samples {
+            peak = peak.max(s.kinetic.abs() + s.internal.abs() + s.hourglass.abs());
+            for c in &s.contacts {
+                peak = peak.max(c.max_penetration);
+            }
+        }
+        eprintln!("overlap ({method}): largest energy or penetration over the run {peak:.2e}");
+        assert!(peak < 1e-12, "{method}: the bodies moved: {peak:e}");
+    }
+}
