@@ -133,6 +133,8 @@ pub struct ContactSet {
     /// Inverse mass per local node and direction (0 on a velocity-constrained direction).
     inv_mass: Vec<[f64; 2]>,
     mass: Vec<f64>,
+    /// 1 / the factor on the masses of the step's velocity update (1 without damping).
+    inv_mass_scale: f64,
     /// v^{n-1/2} of the local nodes.
     v_old: Vec<[f64; 2]>,
     /// Positions at the last search.
@@ -286,6 +288,7 @@ impl ContactSet {
             walls,
             inv_mass,
             mass,
+            inv_mass_scale: 1.0,
             v_old: vec![[0.0; 2]; nodes.len()],
             x_ref: vec![[0.0; 2]; nodes.len()],
             x_n: vec![[0.0; 2]; nodes.len()],
@@ -490,7 +493,9 @@ impl ContactSet {
     /// The CONTACT step: after the uncoupled update (v = v^{n+1/2} of the free bodies, boundaries
     /// applied), corrects the velocities of penetrating nodes so that u_{n+1} = u_n + dt v^{n+1/2}
     /// satisfies the constraints (Lagrange), or applies the bounded penalty impulses.
-    /// `dt` is dt^{n+1/2}, `dt_n` the step of the velocity update.
+    /// `dt` is dt^{n+1/2}, `dt_n` the step of the velocity update; `mass_scale` multiplies every
+    /// mass in the update (1 + alpha dt_n / 2 with mass damping, whose force -alpha m v^n then
+    /// takes its share of each correction, so that the impulses reported are the contact's own).
     pub fn apply(
         &mut self,
         model: &Model,
@@ -498,7 +503,9 @@ impl ContactSet {
         v: &mut [[f64; 2]],
         dt: f64,
         dt_n: f64,
+        mass_scale: f64,
     ) -> StepWork {
+        self.inv_mass_scale = 1.0 / mass_scale;
         self.positions(model, u, v, dt);
         if self.search_due() {
             self.search();
@@ -580,7 +587,7 @@ impl ContactSet {
                 continue;
             }
             let g = g as usize;
-            let m = self.mass[l];
+            let m = self.mass[l] / self.inv_mass_scale;
             for k in 0..2 {
                 let vn = v[g][k] + d[k];
                 let j = m * d[k];
@@ -609,13 +616,14 @@ impl ContactSet {
     /// Applies impulse `lambda` along `c.n` (slave) and its reaction (master nodes).
     #[inline]
     fn impulse(&mut self, c: &Constraint, lambda: f64) {
-        let im = self.inv_mass[c.s as usize];
+        let sc = self.inv_mass_scale;
+        let im = self.inv_mass[c.s as usize].map(|x| x * sc);
         let d = &mut self.dv[c.s as usize];
         d[0] += lambda * c.n[0] * im[0];
         d[1] += lambda * c.n[1] * im[1];
         if c.a != u32::MAX {
             for (node, share) in [(c.a, 1.0 - c.xi), (c.b, c.xi)] {
-                let im = self.inv_mass[node as usize];
+                let im = self.inv_mass[node as usize].map(|x| x * sc);
                 let d = &mut self.dv[node as usize];
                 d[0] -= share * lambda * c.n[0] * im[0];
                 d[1] -= share * lambda * c.n[1] * im[1];
@@ -633,7 +641,7 @@ impl ContactSet {
         if let Some((a, b)) = ab {
             w += (1.0 - xi) * (1.0 - xi) * along(a) + xi * xi * along(b);
         }
-        dt * w
+        dt * w * self.inv_mass_scale
     }
 
     fn free_relative(&self, s: u32, ab: Option<(u32, u32)>, xi: f64, n: [f64; 2]) -> f64 {
