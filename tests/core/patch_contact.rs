@@ -216,7 +216,7 @@ fn one_pass_lagrange_fails_the_contact_patch_test_on_non_nested_meshes() {
             );
             assert!(r.kinetic_ratio < 1e-9, "not settled: {:e}", r.kinetic_ratio);
             assert!(
-                r.stress_error > 0.01,
+                r.stress_error > 0.03,
                 "{lower}/{upper}, {side} slave: one pass should fail the patch test, \
                  stress error only {:e} p",
                 r.stress_error
@@ -231,21 +231,26 @@ fn one_pass_lagrange_fails_the_contact_patch_test_on_non_nested_meshes() {
 fn two_pass_penalty_is_close_but_not_exact() {
     // Penalty contact does not pass the patch test exactly: the springs carry the pressure with
     // a penetration p / k that differs from node to node on non-matching meshes. Reported, and
-    // bounded (the bound is loose: a regression check, not an accuracy claim).
+    // bounded (the bound is loose: a regression check, not an accuracy claim). With the default
+    // penalty_scale = 0.1 the springs let the surfaces interpenetrate by about 2.5 mm here (five
+    // times the elastic compression of the blocks) and the run does not settle within the
+    // 10 ms: the scales 1 and 10 are used.
     for (lower, upper) in MESHES {
-        let r = settle(
-            lower,
-            upper,
-            "upper",
-            "method = \"penalty\"\ntwo_pass = true",
-        );
-        eprintln!(
-            "contact patch test, two-pass penalty (scale 0.1), {lower}/{upper}: stress error {:.3e} p, \
-             contact force {:.10} p, kinetic/strain {:.1e}",
-            r.stress_error, r.contact_force, r.kinetic_ratio
-        );
-        assert!(r.kinetic_ratio < 1e-9, "not settled: {:e}", r.kinetic_ratio);
-        assert!(r.stress_error < 0.5, "stress error {:e} p", r.stress_error);
-        assert!((r.contact_force - 1.0).abs() < 1e-4);
+        for scale in [1.0, 10.0] {
+            let r = settle(
+                lower,
+                upper,
+                "upper",
+                &format!("method = \"penalty\"\ntwo_pass = true\npenalty_scale = {scale}"),
+            );
+            eprintln!(
+                "contact patch test, two-pass penalty (scale {scale}), {lower}/{upper}: stress \
+                 error {:.3e} p, contact force {:.10} p, kinetic/strain {:.1e}",
+                r.stress_error, r.contact_force, r.kinetic_ratio
+            );
+            assert!(r.kinetic_ratio < 1e-9, "not settled: {:e}", r.kinetic_ratio);
+            assert!(r.stress_error < 0.5, "stress error {:e} p", r.stress_error);
+            assert!((r.contact_force - 1.0).abs() < 1e-4);
+        }
     }
 }
