@@ -254,3 +254,60 @@ fn two_pass_penalty_is_close_but_not_exact() {
         }
     }
 }
+
+#[test]
+fn pressure_and_damping_stages_only_when_used_and_auto_falls_back_to_the_cpu() {
+    // A scene without pressure or damping (mass_damping = 0 included) pays for neither.
+    let plain = scene(4, 3, "upper", "method = \"lagrange\"")
+        .replace("mass_damping = 1.2e4", "mass_damping = 0.0");
+    let start = plain.find("[[pressure]]").expect("pressure table");
+    let end = plain[start..].find("[[boundary]]").expect("boundary table") + start;
+    let plain = format!("{}{}", &plain[..start], &plain[end..]);
+    let (_, model, plan) = build(&plain);
+    assert!(model.pressures.is_empty() && model.mass_damping == 0.0);
+    assert!(!plan.has(Stage::Pressure) && !plan.has(Stage::MassDamping));
+    assert_eq!(plan.pressure_nodes, 0);
+    assert_eq!(plan.cpu_only(), Some("contact and rigid walls"));
+    // With both: the stages, in order, and the loaded nodes (the top edge: upper + 1 nodes).
+    let (_, _, plan) = build(&scene(4, 3, "upper", "method = \"lagrange\""));
+    let names = plan.to_string();
+    assert!(
+        names.contains("bulk_viscosity -> pressure -> stable_step -> mass_damping -> node_update"),
+        "{names}"
+    );
+    assert_eq!(plan.pressure_nodes, 4);
+    // `--backend auto` runs a pressure-only scene on the CPU with a notice naming the reason.
+    let dir = tmp_dir("patch-auto");
+    let file = dir.join("pressure_only.toml");
+    let no_contact = {
+        let s = scene(4, 3, "upper", "method = \"lagrange\"")
+            .replace("end_time = 1.0e-2", "end_time = 1.0e-4")
+            .replace("mass_damping = 1.2e4", "mass_damping = 0.0");
+        let start = s.find("[[contact]]").expect("contact table");
+        let end = s[start..].find("[[pressure]]").expect("pressure table") + start;
+        format!("{}{}", &s[..start], &s[end..])
+    };
+    std::fs::write(&file, no_contact).unwrap();
+    let out = dir.join("out");
+    let o = run_bin(&[
+        "run",
+        file.to_str().unwrap(),
+        "--backend",
+        "auto",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("pressure loads run on the CPU backend only"),
+        "{err}"
+    );
+    let check = run_bin(&["check", file.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        text.contains("pressure[0]: 2.1e8 Pa on 3 edges (4 nodes)"),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
