@@ -202,6 +202,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             };
             let mut solver: Box<dyn Solver> = match backend {
                 Backend::Cpu => cpu(),
+                Backend::Auto if plan.cpu_only().is_some() => {
+                    eprintln!(
+                        "notice: {} run on the CPU backend only for now; running on the CPU",
+                        plan.cpu_only().unwrap_or("this scene's stages")
+                    );
+                    cpu()
+                }
                 Backend::Auto => match GpuContext::new(adapter.as_deref()) {
                     Ok(ctx) => Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?),
                     Err(e) => {
@@ -363,9 +370,35 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             println!("  overlap  ... {} in all", overlaps.len());
         }
     }
+    for (i, p) in model.pressures.iter().enumerate() {
+        let ramp = match p.ramp {
+            Some(r) => format!(", ramped over {r:e} s"),
+            None => String::new(),
+        };
+        println!(
+            "pressure   pressure[{i}]: {:e} Pa on {} edges ({} nodes){ramp}",
+            p.value,
+            p.edges,
+            p.nodes.len()
+        );
+    }
+    if model.mass_damping > 0.0 {
+        println!(
+            "damping    mass-proportional, alpha = {:e} 1/s (critical for the mode omega = {:e} rad/s)",
+            model.mass_damping,
+            0.5 * model.mass_damping
+        );
+    }
     let bytes_cpu = plan.nodes * (8 * 2 * 4 + 8)
         + plan.elements * (16 + 64 + 4)
-        + plan.elements * if plan.has_dissipation() { 48 } else { 0 };
+        + plan.elements * if plan.has_dissipation() { 48 } else { 0 }
+        + plan.nodes
+            * if plan.has(ricochet::plan::Stage::MassDamping) {
+                16
+            } else {
+                0
+            }
+        + plan.pressure_nodes * 24;
     println!(
         "memory     about {:.1} MiB (CPU reference)",
         bytes_cpu as f64 / 1048576.0

@@ -5,6 +5,7 @@
 
 use std::ops::Range;
 
+use crate::contact::surface::Surface;
 use crate::contact::{ContactSet, Overlap};
 use crate::error::Result;
 use crate::mesh::Mesh;
@@ -37,6 +38,33 @@ pub struct NodeConstraint {
     pub vy: Option<f64>,
 }
 
+/// A pressure load resolved to nodal forces.
+///
+/// The consistent nodal forces of a uniform pressure on the loaded edges, per unit pressure:
+/// p L t / 2 on each edge node along the inward normal of the reference edge (a nominal,
+/// dead-direction load, exact for the geometrically linear material).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PressureLoad {
+    /// Pressure (Pa), positive compressive.
+    pub value: f64,
+    /// Duration of the linear ramp (s), if any.
+    pub ramp: Option<f64>,
+    /// Loaded nodes (global indices, ascending) and their force per unit pressure (N/Pa).
+    pub nodes: Vec<(u32, [f64; 2])>,
+    /// Number of loaded edges.
+    pub edges: usize,
+}
+
+impl PressureLoad {
+    /// The pressure at time `t`: `value`, scaled by `min(t / ramp, 1)` with a ramp.
+    pub fn at(&self, t: f64) -> f64 {
+        match self.ramp {
+            Some(r) => self.value * (t / r).clamp(0.0, 1.0),
+            None => self.value,
+        }
+    }
+}
+
 /// The whole model as flat arrays.
 #[derive(Debug, Clone)]
 pub struct Model {
@@ -62,6 +90,10 @@ pub struct Model {
     pub contacts: Vec<scene::Contact>,
     /// Rigid walls (as in the scene).
     pub walls: Vec<scene::RigidWall>,
+    /// Pressure loads.
+    pub pressures: Vec<PressureLoad>,
+    /// Mass-proportional damping coefficient alpha (1/s), 0 for none.
+    pub mass_damping: f64,
 }
 
 impl Model {
@@ -84,6 +116,8 @@ impl Model {
             contacts: scene.contacts.clone(),
             walls: scene.walls.clone(),
             initial_overlaps: Vec::new(),
+            pressures: Vec::new(),
+            mass_damping: scene.run.mass_damping,
         };
         for (bi, body) in scene.bodies.iter().enumerate() {
             let mesh = Mesh::generate(&body.mesh);
@@ -203,6 +237,22 @@ impl Model {
             }
         }
         m.remove_initial_overlaps(scene)?;
+        for p in &scene.pressures {
+            let load = m.pressure_load(p, scene.bodies[p.body].thickness);
+            if load.edges == 0 {
+                return Err(scene::invalid(
+                    scene,
+                    format!("{}.region", p.key),
+                    format!("{{ min = {:?}, max = {:?} }}", p.min, p.max),
+                    &format!(
+                        "the box selects no boundary edge of body {:?} (both end nodes of an edge \
+                         must lie in the box)",
+                        scene.bodies[p.body].name
+                    ),
+                ));
+            }
+            m.pressures.push(load);
+        }
         Ok(m)
     }
 
@@ -263,6 +313,41 @@ impl Model {
             self.initial_overlaps.extend(found);
         }
         Ok(())
+    }
+
+    /// The nodal forces per unit pressure of `p`: on every boundary edge of its body whose two
+    /// nodes lie in its box (reference coordinates, bounds included), `L t / 2` on each node along
+    /// the edge's inward normal.
+    fn pressure_load(&self, p: &scene::Pressure, thickness: f64) -> PressureLoad {
+        let surface = Surface::of_body(self, p.body);
+        let inside = |n: u32| {
+            let x = self.position[n as usize];
+            x[0] >= p.min[0] && x[0] <= p.max[0] && x[1] >= p.min[1] && x[1] <= p.max[1]
+        };
+        let mut force: std::collections::BTreeMap<u32, [f64; 2]> = Default::default();
+        let mut edges = 0;
+        for seg in &surface.segments {
+            let [a, b] = seg.nodes;
+            if !(inside(a) && inside(b)) {
+                continue;
+            }
+            edges += 1;
+            // Outward normal times length: (t_y, -t_x) with t = b - a (body on the left).
+            let (xa, xb) = (self.position[a as usize], self.position[b as usize]);
+            let t = [xb[0] - xa[0], xb[1] - xa[1]];
+            let f = [-0.5 * thickness * t[1], 0.5 * thickness * t[0]];
+            for n in [a, b] {
+                let e = force.entry(n).or_insert([0.0; 2]);
+                e[0] += f[0];
+                e[1] += f[1];
+            }
+        }
+        PressureLoad {
+            value: p.value,
+            ramp: p.ramp,
+            nodes: force.into_iter().collect(),
+            edges,
+        }
     }
 
     /// Number of nodes.

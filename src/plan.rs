@@ -16,8 +16,12 @@ pub enum Stage {
     HourglassStiffness,
     /// Bulk viscosity in compression.
     BulkViscosity,
+    /// Pressure loads: their consistent nodal forces added to f_n (scenes with `[[pressure]]`).
+    Pressure,
     /// Minimum reduction of the element stable steps.
     StableStep,
+    /// Mass-proportional damping in the velocity update, and its work (`run.mass_damping` > 0).
+    MassDamping,
     /// Central-difference velocity and displacement update.
     NodeUpdate,
     /// Prescribed velocities.
@@ -38,7 +42,9 @@ impl Stage {
             Stage::HourglassViscous => "hourglass_viscous",
             Stage::HourglassStiffness => "hourglass_stiffness",
             Stage::BulkViscosity => "bulk_viscosity",
+            Stage::Pressure => "pressure",
             Stage::StableStep => "stable_step",
+            Stage::MassDamping => "mass_damping",
             Stage::NodeUpdate => "node_update",
             Stage::VelocityBoundaries => "velocity_boundaries",
             Stage::Contact => "contact",
@@ -67,6 +73,8 @@ pub struct Plan {
     pub contacts: usize,
     /// Rigid walls.
     pub walls: usize,
+    /// Nodes loaded by pressure (summed over the loads).
+    pub pressure_nodes: usize,
 }
 
 impl Plan {
@@ -92,8 +100,14 @@ impl Plan {
         if model.bodies.iter().any(|b| b.params.has_bulk_viscosity()) {
             stages.push(Stage::BulkViscosity);
         }
+        if !model.pressures.is_empty() {
+            stages.push(Stage::Pressure);
+        }
         if scene.run.time_step.is_none() {
             stages.push(Stage::StableStep);
+        }
+        if model.mass_damping > 0.0 {
+            stages.push(Stage::MassDamping);
         }
         stages.push(Stage::NodeUpdate);
         if !model.constraints.is_empty() {
@@ -115,12 +129,25 @@ impl Plan {
             constrained_nodes: model.constraints.len(),
             contacts: model.contacts.len(),
             walls: model.walls.len(),
+            pressure_nodes: model.pressures.iter().map(|p| p.nodes.len()).sum(),
         }
     }
 
     /// Whether the plan has `stage`.
     pub fn has(&self, stage: Stage) -> bool {
         self.stages.contains(&stage)
+    }
+
+    /// Why the plan runs on the CPU backend only, if it does: the stages the GPU kernels do not
+    /// implement yet (pressure loads, mass damping).
+    pub fn cpu_only(&self) -> Option<&'static str> {
+        if self.has(Stage::Pressure) {
+            Some("pressure loads")
+        } else if self.has(Stage::MassDamping) {
+            Some("mass damping")
+        } else {
+            None
+        }
     }
 
     /// Whether any element keeps dissipative state between steps (viscous hourglass or bulk viscosity).

@@ -37,6 +37,17 @@ struct RawScene {
     contact: Vec<RawContact>,
     #[serde(default)]
     rigid_wall: Vec<RawWall>,
+    #[serde(default)]
+    pressure: Vec<RawPressure>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPressure {
+    body: String,
+    region: RawRegion,
+    value: f64,
+    ramp: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -70,6 +81,7 @@ struct RawRun {
     field_interval: Option<f64>,
     energy_error_limit: Option<f64>,
     bulk_viscosity: Option<RawBulk>,
+    mass_damping: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -348,6 +360,23 @@ pub struct RigidWall {
     pub penalty_scale: f64,
 }
 
+/// A pressure (traction) load on the boundary edges of a body inside a box.
+#[derive(Debug, Clone)]
+pub struct Pressure {
+    /// Index into [`Scene::bodies`].
+    pub body: usize,
+    /// Box lower corner.
+    pub min: [f64; 2],
+    /// Box upper corner.
+    pub max: [f64; 2],
+    /// Pressure (Pa), acting against the outward normal (positive: compressive).
+    pub value: f64,
+    /// Duration of the linear ramp from 0 (s), if any; constant afterwards.
+    pub ramp: Option<f64>,
+    /// Key prefix used in messages (`pressure[i]`).
+    pub key: String,
+}
+
 /// Run control, validated.
 #[derive(Debug, Clone)]
 pub struct RunSettings {
@@ -367,6 +396,9 @@ pub struct RunSettings {
     pub bulk_linear: f64,
     /// Quadratic bulk-viscosity coefficient.
     pub bulk_quadratic: f64,
+    /// Mass-proportional damping coefficient alpha (1/s): a force -alpha m v on every node
+    /// (0: none).
+    pub mass_damping: f64,
 }
 
 /// A validated scene.
@@ -388,6 +420,8 @@ pub struct Scene {
     pub contacts: Vec<Contact>,
     /// Rigid walls.
     pub walls: Vec<RigidWall>,
+    /// Pressure loads.
+    pub pressures: Vec<Pressure>,
 }
 
 impl Scene {
@@ -524,6 +558,11 @@ impl Validator<'_> {
             self.unique_name(&key, &w.name, &contacts, &walls)?;
             walls.push(w);
         }
+        let mut pressures = Vec::new();
+        for (i, p) in raw.pressure.iter().enumerate() {
+            let key = format!("pressure[{i}]");
+            pressures.push(self.pressure(&key, p, &bodies)?);
+        }
         let name = self
             .file
             .file_stem()
@@ -538,6 +577,7 @@ impl Validator<'_> {
             boundaries,
             contacts,
             walls,
+            pressures,
         })
     }
 
@@ -721,6 +761,10 @@ impl Validator<'_> {
             ),
             None => (DEFAULT_BULK_LINEAR, DEFAULT_BULK_QUADRATIC),
         };
+        let mass_damping = match r.mass_damping {
+            Some(a) => self.non_negative("run.mass_damping", a)?,
+            None => 0.0,
+        };
         Ok(RunSettings {
             end_time,
             time_step_scale,
@@ -730,6 +774,7 @@ impl Validator<'_> {
             energy_error_limit,
             bulk_linear,
             bulk_quadratic,
+            mass_damping,
         })
     }
 
@@ -990,17 +1035,7 @@ impl Validator<'_> {
                     &format!("no body of that name (defined: {known:?})"),
                 )
             })?;
-        for i in 0..2 {
-            self.finite(&format!("{key}.region.min"), b.region.min[i])?;
-            self.finite(&format!("{key}.region.max"), b.region.max[i])?;
-            if b.region.min[i] > b.region.max[i] {
-                return Err(self.invalid(
-                    format!("{key}.region"),
-                    format!("min = {:?}, max = {:?}", b.region.min, b.region.max),
-                    "min must not exceed max",
-                ));
-            }
-        }
+        self.region(key, &b.region)?;
         if b.velocity.x.is_none() && b.velocity.y.is_none() {
             return Err(self.invalid(
                 format!("{key}.velocity"),
@@ -1020,6 +1055,42 @@ impl Validator<'_> {
             max: b.region.max,
             vx: b.velocity.x,
             vy: b.velocity.y,
+            key: key.to_string(),
+        })
+    }
+}
+
+impl Validator<'_> {
+    /// A box `{ min, max }`: finite, min <= max component-wise.
+    fn region(&self, key: &str, r: &RawRegion) -> Result<()> {
+        for i in 0..2 {
+            self.finite(&format!("{key}.region.min"), r.min[i])?;
+            self.finite(&format!("{key}.region.max"), r.max[i])?;
+            if r.min[i] > r.max[i] {
+                return Err(self.invalid(
+                    format!("{key}.region"),
+                    format!("min = {:?}, max = {:?}", r.min, r.max),
+                    "min must not exceed max",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn pressure(&self, key: &str, p: &RawPressure, bodies: &[Body]) -> Result<Pressure> {
+        let body = self.body_index(&format!("{key}.body"), &p.body, bodies)?;
+        self.region(key, &p.region)?;
+        let value = self.finite(&format!("{key}.value"), p.value)?;
+        let ramp = p
+            .ramp
+            .map(|r| self.positive(&format!("{key}.ramp"), r))
+            .transpose()?;
+        Ok(Pressure {
+            body,
+            min: p.region.min,
+            max: p.region.max,
+            value,
+            ramp,
             key: key.to_string(),
         })
     }

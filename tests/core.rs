@@ -7,7 +7,10 @@
 //! - [`hourglass`]: hourglass modes, their control (stiffness, viscous) and reported energy;
 //! - [`mass`]: lumped mass and momentum conservation;
 //! - [`wave`]: 1D waves in a rod strip against the dispersion table of `REFERENCES.md` section 2;
-//! - [`energy`]: the energy audit of a free-vibrating block (conservative and dissipative);
+//! - [`energy`]: the energy audit of a free-vibrating block (conservative and dissipative), of a
+//!   pressure load and of mass damping;
+//! - [`patch_contact`]: the contact patch test (two blocks, non-matching meshes, pressure load,
+//!   mass damping): two-pass Lagrange exact, one pass failing as it should;
 //! - [`contact`]: rod impact (Lagrange, penalty, rigid wall, impedance mismatch), corner-first
 //!   square on a wall, the contact plan and history columns;
 //! - [`bad_input`]: every rejected scene exits with status 2 and names the file, key and value;
@@ -30,6 +33,8 @@ mod mass;
 mod outputs;
 #[path = "core/patch.rs"]
 mod patch;
+#[path = "core/patch_contact.rs"]
+mod patch_contact;
 #[path = "core/rigid.rs"]
 mod rigid;
 #[path = "core/wave.rs"]

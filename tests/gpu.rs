@@ -467,5 +467,28 @@ fn unstable_gpu_run_stops_with_a_diagnostic() {
     );
 }
 
+#[test]
+fn pressure_and_damping_scenes_are_refused_by_the_gpu_backend_with_a_clear_error() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let base = asset("vibrating_block.toml");
+    let pressure = format!(
+        "{base}\n[[pressure]]\nbody = \"block\"\nregion = {{ min = [-0.01, 0.049], max = [0.11, 0.051] }}\nvalue = 1.0e6\n"
+    );
+    let damped = base.replacen("[run]\n", "[run]\nmass_damping = 100.0\n", 1);
+    assert_ne!(damped, base);
+    for (text, what) in [(pressure, "pressure loads"), (damped, "mass damping")] {
+        let (scene, model, plan) = load(&text, "cpu_only");
+        assert_eq!(plan.cpu_only(), Some(what));
+        match GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)) {
+            Ok(_) => panic!("a scene with {what} must not run on the GPU"),
+            Err(e) => {
+                let m = e.to_string();
+                assert!(m.contains("CPU backend only") && m.contains(what), "{m}");
+            }
+        }
+    }
+}
+
 #[path = "gpu/contact.rs"]
 mod contact;

@@ -99,6 +99,12 @@ impl GpuSolver {
         schedule: Schedule,
         fused: Option<bool>,
     ) -> Result<Self> {
+        if let Some(what) = plan.cpu_only() {
+            return Err(Error::Gpu(format!(
+                "{what} run on the CPU backend only for now (`--backend cpu`); \
+                 the GPU kernels for them are not written yet"
+            )));
+        }
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),

@@ -36,6 +36,19 @@ pub struct CpuSolver {
     hourglass_work: f64,
     bulk_work: f64,
     external_work: f64,
+    /// Pressure loads flattened: (load, node, force per unit pressure); empty without pressure.
+    pressure: Vec<(usize, u32, [f64; 2])>,
+    /// The pressure impulse of the step on each entry of `pressure`, and v^{n-1/2} there.
+    pressure_impulse: Vec<[f64; 2]>,
+    pressure_v_old: Vec<[f64; 2]>,
+    /// Work of the pressure impulses so far, and the part of the last step's after t_n.
+    pressure_work: f64,
+    pressure_after: f64,
+    /// v^{n-1/2} of each node on damped steps (empty without damping).
+    damping_v_old: Vec<[f64; 2]>,
+    /// Work of the damping impulses so far (<= 0), and the part of the last step's after t_n.
+    damping_work: f64,
+    damping_after: f64,
     t: f64,
     n: u64,
     dt_prev: f64,
@@ -62,7 +75,30 @@ impl CpuSolver {
         } else {
             Vec::new()
         };
+        let pressure: Vec<(usize, u32, [f64; 2])> = if plan.has(Stage::Pressure) {
+            model
+                .pressures
+                .iter()
+                .enumerate()
+                .flat_map(|(k, p)| p.nodes.iter().map(move |&(n, f)| (k, n, f)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let damping_v_old = if plan.has(Stage::MassDamping) {
+            vec![[0.0; 2]; nn]
+        } else {
+            Vec::new()
+        };
         Self {
+            pressure_impulse: vec![[0.0; 2]; pressure.len()],
+            pressure_v_old: vec![[0.0; 2]; pressure.len()],
+            pressure,
+            pressure_work: 0.0,
+            pressure_after: 0.0,
+            damping_v_old,
+            damping_work: 0.0,
+            damping_after: 0.0,
             contact: ContactSet::new(&model),
             contact_work: 0.0,
             contact_after: 0.0,
@@ -234,6 +270,15 @@ impl CpuSolver {
                 st.hourglass_stored += out.hourglass_stored;
             }
         }
+        // Pressure loads: consistent nodal forces of the pressure at t_n.
+        for (k, &(load, node, per_pa)) in self.pressure.iter().enumerate() {
+            let p = self.model.pressures[load].at(self.t);
+            let f = [p * per_pa[0], p * per_pa[1]];
+            self.f[node as usize][0] += f[0];
+            self.f[node as usize][1] += f[1];
+            // Kept as the force until the node stage turns it into the step's impulse.
+            self.pressure_impulse[k] = f;
+        }
         Ok(st)
     }
 
@@ -302,14 +347,49 @@ impl CpuSolver {
         if let Some(c) = self.contact.as_mut() {
             c.keep_old_velocity(&self.v);
         }
+        // The pressure impulses of the step: dt_n F_n (dt^{1/2} F_0 on the first step, where the
+        // conserved form uses v^{-1/2} = 2 v_0 - v^{1/2}; see the output below), and v^{n-1/2}.
+        let load_dt = if self.n == 0 { dt_next } else { dt_n };
+        for (k, &(_, node, _)) in self.pressure.iter().enumerate() {
+            let j = &mut self.pressure_impulse[k];
+            *j = [load_dt * j[0], load_dt * j[1]];
+            self.pressure_v_old[k] = self.v[node as usize];
+        }
         let mut bad = None;
-        for i in 0..self.v.len() {
-            let w = dt_n * self.inv_mass[i];
-            let v = &mut self.v[i];
-            v[0] += w * self.f[i][0];
-            v[1] += w * self.f[i][1];
-            if bad.is_none() && !(v[0].is_finite() && v[1].is_finite()) {
-                bad = Some(i);
+        // Mass damping (from the second step on: the first half step stays undamped so that the
+        // start-up v^{-1/2} = 2 v_0 - v^{1/2} keeps its meaning), with the force at t_n taken as
+        // -alpha m (v^{n-1/2} + v^{n+1/2}) / 2 of the final velocities:
+        // (1 + c) m v+ = (1 - c) m v- + dt_n f + J (c = alpha dt_n / 2, J the boundary and contact
+        // impulses), stable for any alpha >= 0. The constraints below therefore see the masses
+        // (1 + c) m; the damping impulse -c m (v- + v+) and its work are summed at the end.
+        let damped = !self.damping_v_old.is_empty() && self.n > 0;
+        let damp_c = if damped {
+            0.5 * self.model.mass_damping * dt_n
+        } else {
+            0.0
+        };
+        let mass_scale = 1.0 + damp_c;
+        if damped {
+            let (keep, scale) = ((1.0 - damp_c) / mass_scale, 1.0 / mass_scale);
+            for i in 0..self.v.len() {
+                let w = scale * dt_n * self.inv_mass[i];
+                let v = &mut self.v[i];
+                self.damping_v_old[i] = *v;
+                v[0] = keep * v[0] + w * self.f[i][0];
+                v[1] = keep * v[1] + w * self.f[i][1];
+                if bad.is_none() && !(v[0].is_finite() && v[1].is_finite()) {
+                    bad = Some(i);
+                }
+            }
+        } else {
+            for i in 0..self.v.len() {
+                let w = dt_n * self.inv_mass[i];
+                let v = &mut self.v[i];
+                v[0] += w * self.f[i][0];
+                v[1] += w * self.f[i][1];
+                if bad.is_none() && !(v[0].is_finite() && v[1].is_finite()) {
+                    bad = Some(i);
+                }
             }
         }
         if let Some(i) = bad {
@@ -327,7 +407,7 @@ impl CpuSolver {
         if self.plan.has(Stage::VelocityBoundaries) {
             for c in &self.model.constraints {
                 let i = c.node as usize;
-                let m = self.model.mass[i];
+                let m = mass_scale * self.model.mass[i];
                 for (k, val) in [(0, c.vx), (1, c.vy)] {
                     if let Some(val) = val {
                         step_work += m * (val - self.v[i][k]) * val;
@@ -344,14 +424,46 @@ impl CpuSolver {
                 *p = [2.0 * p[0] - v[0], 2.0 * p[1] - v[1]];
             }
         }
+        if self.n == 0 {
+            for (k, &(_, node, _)) in self.pressure.iter().enumerate() {
+                let (o, v) = (&mut self.pressure_v_old[k], self.v[node as usize]);
+                *o = [2.0 * o[0] - v[0], 2.0 * o[1] - v[1]];
+            }
+        }
         // CONTACT: correct the penetrating nodes of the uncoupled update.
         if let Some(c) = self.contact.as_mut() {
             if self.n == 0 {
                 c.first_step_old_velocity(&self.v);
             }
-            let w = c.apply(&self.model, &self.u, &mut self.v, dt_next, dt_n);
+            let w = c.apply(&self.model, &self.u, &mut self.v, dt_next, dt_n, mass_scale);
             self.contact_work += w.work;
             self.contact_after = w.after;
+        }
+        // Work of the pressure and damping impulses, J (v^{n-1/2} + v^{n+1/2}) / 2 with the final
+        // v^{n+1/2} (boundaries and contact applied), half of it after t_n.
+        if !self.pressure.is_empty() {
+            let (mut before, mut after) = (0.0, 0.0);
+            for (k, &(_, node, _)) in self.pressure.iter().enumerate() {
+                let (j, o, v) = (
+                    self.pressure_impulse[k],
+                    self.pressure_v_old[k],
+                    self.v[node as usize],
+                );
+                before += 0.5 * (j[0] * o[0] + j[1] * o[1]);
+                after += 0.5 * (j[0] * v[0] + j[1] * v[1]);
+            }
+            self.pressure_work += before + after;
+            self.pressure_after = after;
+        }
+        if damped {
+            let (mut before, mut after) = (0.0, 0.0);
+            for ((o, v), m) in self.damping_v_old.iter().zip(&self.v).zip(&self.model.mass) {
+                let j = [-damp_c * m * (o[0] + v[0]), -damp_c * m * (o[1] + v[1])];
+                before += 0.5 * (j[0] * o[0] + j[1] * o[1]);
+                after += 0.5 * (j[0] * v[0] + j[1] * v[1]);
+            }
+            self.damping_work += before + after;
+            self.damping_after = after;
         }
         // 4. Output at t_n.
         if snapshot_due {
@@ -395,8 +507,9 @@ impl CpuSolver {
                 kinetic,
                 internal: st.strain,
                 hourglass: st.hourglass_stored + self.hourglass_work,
-                viscous: self.bulk_work,
-                external: self.external_work - 0.5 * step_work,
+                viscous: self.bulk_work - (self.damping_work - self.damping_after),
+                external: self.external_work - 0.5 * step_work
+                    + (self.pressure_work - self.pressure_after),
                 contact: -(self.contact_work - self.contact_after),
                 contacts: self
                     .contact

@@ -437,3 +437,98 @@ fn contact_keys_are_checked() {
         &["friction"],
     );
 }
+
+fn with_pressure(keys: &str) -> String {
+    format!("{}\n[[pressure]]\n{keys}\n", valid())
+}
+
+#[test]
+fn pressure_keys_are_checked() {
+    let top = "region = { min = [-0.01, 0.049], max = [0.11, 0.051] }";
+    expect_rejected(
+        "pressure_unknown_body",
+        &with_pressure(&format!("body = \"blok\"\n{top}\nvalue = 1.0e6")),
+        &["pressure[0].body", "\"blok\"", "no body of that name"],
+    );
+    expect_rejected(
+        "pressure_no_edge",
+        &with_pressure(
+            "body = \"block\"\nregion = { min = [5.0, 5.0], max = [6.0, 6.0] }\nvalue = 1.0e6",
+        ),
+        &["pressure[0].region", "min = [5.0, 5.0]", "no boundary edge"],
+    );
+    // One boundary node only (the corner): no edge has both its nodes in the box.
+    expect_rejected(
+        "pressure_one_node",
+        &with_pressure(
+            "body = \"block\"\nregion = { min = [-0.001, -0.001], max = [0.001, 0.001] }\nvalue = 1.0e6",
+        ),
+        &["pressure[0].region", "no boundary edge"],
+    );
+    // Interior edges (the middle row of nodes) are not loaded.
+    expect_rejected(
+        "pressure_interior_edges",
+        &with_pressure(
+            "body = \"block\"\nregion = { min = [0.02, 0.024], max = [0.08, 0.026] }\nvalue = 1.0e6",
+        ),
+        &["pressure[0].region", "no boundary edge"],
+    );
+    expect_rejected(
+        "pressure_inverted_box",
+        &with_pressure(
+            "body = \"block\"\nregion = { min = [0.2, 0.0], max = [0.1, 0.05] }\nvalue = 1.0e6",
+        ),
+        &["pressure[0].region", "min must not exceed max"],
+    );
+    expect_rejected(
+        "pressure_nan_value",
+        &with_pressure(&format!("body = \"block\"\n{top}\nvalue = nan")),
+        &["pressure[0].value", "NaN", "finite"],
+    );
+    expect_rejected(
+        "pressure_zero_ramp",
+        &with_pressure(&format!(
+            "body = \"block\"\n{top}\nvalue = 1.0e6\nramp = 0.0"
+        )),
+        &["pressure[0].ramp", "0.0", "positive"],
+    );
+    expect_rejected(
+        "pressure_negative_ramp",
+        &with_pressure(&format!(
+            "body = \"block\"\n{top}\nvalue = 1.0e6\nramp = -1.0e-3"
+        )),
+        &["pressure[0].ramp", "-0.001", "positive"],
+    );
+    expect_rejected(
+        "pressure_missing_value",
+        &with_pressure(&format!("body = \"block\"\n{top}")),
+        &["value"],
+    );
+    expect_rejected(
+        "pressure_unknown_key",
+        &with_pressure(&format!(
+            "body = \"block\"\n{top}\nvalue = 1.0e6\nfollower = true"
+        )),
+        &["follower"],
+    );
+}
+
+#[test]
+fn mass_damping_is_checked() {
+    expect_rejected(
+        "mass_damping_negative",
+        &variant(
+            "end_time = 1.0e-5\n",
+            "end_time = 1.0e-5\nmass_damping = -1.0\n",
+        ),
+        &["run.mass_damping", "-1.0", ">= 0"],
+    );
+    expect_rejected(
+        "mass_damping_infinite",
+        &variant(
+            "end_time = 1.0e-5\n",
+            "end_time = 1.0e-5\nmass_damping = inf\n",
+        ),
+        &["run.mass_damping", "inf", ">= 0"],
+    );
+}

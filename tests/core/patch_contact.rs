@@ -1,0 +1,313 @@
+//! The contact patch test of `REFERENCES.md` section 3 (Taylor & Papadopoulos 1991) on the CPU
+//! reference path: two plane-strain steel blocks touching along y = 0.5 with non-matching meshes
+//! (4/3, 5/4 and 8/6 elements along x, two layers each), a uniform pressure p = 1e-3 E on the top
+//! edge ramped slowly, mass damping, u_y = 0 at y = 0 and u_x = 0 on x = 0. Once the blocks have
+//! settled, every element must carry sigma_yy = -p, sigma_xx = sigma_xy = 0.
+//!
+//! Two-pass Lagrange contact passes (error below 1e-4 p asserted; measured about 1e-9 p).
+//! One pass does not on non-nested meshes, and the test asserts that this known failure is
+//! reproduced. Two-pass penalty is not exact either (the springs let the surfaces interpenetrate
+//! unevenly); its error is reported and bounded.
+
+use ricochet::output::fields::element_fields;
+use ricochet::output::history::EnergyAudit;
+use ricochet::plan::Stage;
+use ricochet::run::schedule;
+use ricochet::step::cpu::CpuSolver;
+use ricochet::step::{Event, Sample, Solver};
+
+use crate::common::*;
+
+/// The applied pressure, 1e-3 E.
+const P: f64 = 1e-3 * E_STEEL;
+
+/// Dilatational wave speed of plane-strain steel with nu = 0.3 (m/s).
+fn dilatational_speed() -> f64 {
+    let nu: f64 = 0.3;
+    (E_STEEL * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu) * RHO_STEEL)).sqrt()
+}
+
+/// The two-block scene: `lower` and `upper` elements along x; `first` is the contact's first body
+/// (the slave nodes of the first pass); `contact` holds the method keys.
+fn scene(lower: usize, upper: usize, first: &str, contact: &str) -> String {
+    let second = if first == "upper" { "lower" } else { "upper" };
+    // Ramp over about 12 transits of the 1 m column, then hold; the mass damping alpha = 1.2e4 1/s
+    // is about critical for the lowest (quarter-wave) modes (omega ~ pi c / 2 ~ 8.5e3 rad/s), and
+    // every underdamped mode decays at alpha / 2 at least. 10 ms: the velocities have died out
+    // (kinetic energy below 1e-9 of the strain energy).
+    let transit = 1.0 / dilatational_speed();
+    let ramp = 12.0 * transit;
+    format!(
+        r#"
+[run]
+end_time = 1.0e-2
+history_interval = 1.0e-3
+mass_damping = 1.2e4
+
+[[material]]
+name = "steel"
+model = "linear_elastic"
+density = {RHO_STEEL}
+youngs_modulus = {E_STEEL:e}
+poisson_ratio = 0.3
+
+[[body]]
+name = "upper"
+material = "steel"
+formulation = "plane_strain"
+hourglass = {{ form = "stiffness", coefficient = 0.1 }}
+mesh = {{ rectangle = {{ origin = [0.0, 0.5], size = [1.0, 0.5], cells = [{upper}, 2] }} }}
+
+[[body]]
+name = "lower"
+material = "steel"
+formulation = "plane_strain"
+hourglass = {{ form = "stiffness", coefficient = 0.1 }}
+mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [1.0, 0.5], cells = [{lower}, 2] }} }}
+
+[[contact]]
+bodies = ["{first}", "{second}"]
+name = "interface"
+{contact}
+
+[[pressure]]
+body = "upper"
+region = {{ min = [-0.01, 0.99], max = [1.01, 1.01] }}
+value = {P:e}
+ramp = {ramp:e}
+
+[[boundary]]
+body = "lower"
+region = {{ min = [-0.01, -0.01], max = [1.01, 0.01] }}
+velocity = {{ y = 0.0 }}
+
+[[boundary]]
+body = "lower"
+region = {{ min = [-0.01, -0.01], max = [0.01, 0.51] }}
+velocity = {{ x = 0.0 }}
+
+[[boundary]]
+body = "upper"
+region = {{ min = [-0.01, 0.49], max = [0.01, 1.01] }}
+velocity = {{ x = 0.0 }}
+"#
+    )
+}
+
+/// What a settled run gives.
+struct Settled {
+    /// Largest |sigma_yy + p|, |sigma_xx|, |sigma_xy| over all elements, over p.
+    stress_error: f64,
+    /// Vertical contact force on the upper block over p (1 m wide, unit thickness): exact 1.
+    contact_force: f64,
+    /// Largest nodal speed at the end (m/s).
+    max_speed: f64,
+    /// Largest energy-balance error over the run.
+    energy_error: f64,
+    /// Kinetic over strain energy at the end.
+    kinetic_ratio: f64,
+}
+
+/// Runs [`scene`] to its end.
+fn settle(lower: usize, upper: usize, first: &str, contact: &str) -> Settled {
+    let (scene, model, plan) = build(&scene(lower, upper, first, contact));
+    // The history reports the contact force on the first body.
+    let sign = if first == "upper" { 1.0 } else { -1.0 };
+    assert!(plan.has(Stage::Pressure) && plan.has(Stage::MassDamping));
+    let mut solver = CpuSolver::new(model.clone(), plan, schedule(&scene));
+    let mut events = Vec::new();
+    let mut samples: Vec<Sample> = Vec::new();
+    'run: loop {
+        solver.advance(&mut events).expect("CPU solver");
+        for ev in events.drain(..) {
+            match ev {
+                Event::Sample(s) => samples.push(s),
+                Event::Failed(f) => panic!("the run failed: {}", f.message),
+                Event::Done => break 'run,
+                Event::Snapshot(_) => {}
+            }
+        }
+    }
+    let mut audit = EnergyAudit::default();
+    let energy_error = samples
+        .iter()
+        .map(|s| audit.error(s))
+        .fold(0.0f64, f64::max);
+    let last = samples.last().expect("samples");
+    let u = solver.displacement();
+    let mut stress_error = 0.0f64;
+    for e in 0..model.element_count() {
+        let [sxx, syy, sxy, _] = element_fields(&model, u, e).stress;
+        stress_error = stress_error
+            .max((syy + P).abs() / P)
+            .max(sxx.abs() / P)
+            .max(sxy.abs() / P);
+    }
+    let max_speed = solver
+        .velocity()
+        .iter()
+        .map(|v| v[0].hypot(v[1]))
+        .fold(0.0f64, f64::max);
+    Settled {
+        stress_error,
+        contact_force: sign * last.contacts[0].force[1] / P,
+        max_speed,
+        energy_error,
+        kinetic_ratio: last.kinetic.abs() / last.internal,
+    }
+}
+
+const MESHES: [(usize, usize); 3] = [(4, 3), (5, 4), (8, 6)];
+
+#[test]
+fn two_pass_lagrange_passes_the_contact_patch_test() {
+    // Bound from the Done-when criterion: 1e-4 p. Measured: see the printed errors.
+    for (lower, upper) in MESHES {
+        for first in ["upper", "lower"] {
+            let r = settle(
+                lower,
+                upper,
+                first,
+                "method = \"lagrange\"\ntwo_pass = true",
+            );
+            eprintln!(
+                "contact patch test, two-pass Lagrange, {lower}/{upper}, first body {first}: \
+                 stress error {:.2e} p, contact force {:.10} p, max speed {:.1e} m/s, \
+                 kinetic/strain {:.1e}, energy error {:.1e}",
+                r.stress_error, r.contact_force, r.max_speed, r.kinetic_ratio, r.energy_error
+            );
+            assert!(
+                r.kinetic_ratio < 1e-9,
+                "{lower}/{upper}: not settled, kinetic/strain energy {:e}",
+                r.kinetic_ratio
+            );
+            assert!(
+                r.stress_error < 1e-4,
+                "{lower}/{upper}, first {first}: stress error {:e} p",
+                r.stress_error
+            );
+            assert!(
+                (r.contact_force - 1.0).abs() < 1e-4,
+                "{lower}/{upper}: contact force {} p",
+                r.contact_force
+            );
+            assert!(r.energy_error < 1e-5, "energy error {:e}", r.energy_error);
+        }
+    }
+}
+
+#[test]
+fn one_pass_lagrange_fails_the_contact_patch_test_on_non_nested_meshes() {
+    // The known failure (REFERENCES.md section 3): one pass transmits the pressure through the
+    // slave nodes only; on non-nested meshes the master nodes between them are unsupported and
+    // interpenetrate, and the stress is off by several percent whichever side is the slave.
+    for (lower, upper) in MESHES {
+        for (first, side) in [("upper", "coarse"), ("lower", "fine")] {
+            let r = settle(
+                lower,
+                upper,
+                first,
+                "method = \"lagrange\"\ntwo_pass = false",
+            );
+            eprintln!(
+                "contact patch test, one-pass Lagrange, {lower}/{upper}, {side} side ({first}) \
+                 slave: stress error {:.3} p, contact force {:.10} p, kinetic/strain {:.1e}",
+                r.stress_error, r.contact_force, r.kinetic_ratio
+            );
+            assert!(r.kinetic_ratio < 1e-9, "not settled: {:e}", r.kinetic_ratio);
+            assert!(
+                r.stress_error > 0.03,
+                "{lower}/{upper}, {side} slave: one pass should fail the patch test, \
+                 stress error only {:e} p",
+                r.stress_error
+            );
+            // Equilibrium still holds globally.
+            assert!((r.contact_force - 1.0).abs() < 1e-4);
+        }
+    }
+}
+
+#[test]
+fn two_pass_penalty_is_close_but_not_exact() {
+    // Penalty contact does not pass the patch test exactly: the springs carry the pressure with
+    // a penetration p / k that differs from node to node on non-matching meshes. Reported, and
+    // bounded (the bound is loose: a regression check, not an accuracy claim). With the default
+    // penalty_scale = 0.1 the springs let the surfaces interpenetrate by about 2.5 mm here (five
+    // times the elastic compression of the blocks) and the run does not settle within the
+    // 10 ms: the scales 1 and 10 are used.
+    for (lower, upper) in MESHES {
+        for scale in [1.0, 10.0] {
+            let r = settle(
+                lower,
+                upper,
+                "upper",
+                &format!("method = \"penalty\"\ntwo_pass = true\npenalty_scale = {scale}"),
+            );
+            eprintln!(
+                "contact patch test, two-pass penalty (scale {scale}), {lower}/{upper}: stress \
+                 error {:.3e} p, contact force {:.10} p, kinetic/strain {:.1e}",
+                r.stress_error, r.contact_force, r.kinetic_ratio
+            );
+            assert!(r.kinetic_ratio < 1e-9, "not settled: {:e}", r.kinetic_ratio);
+            assert!(r.stress_error < 0.5, "stress error {:e} p", r.stress_error);
+            assert!((r.contact_force - 1.0).abs() < 1e-4);
+        }
+    }
+}
+
+#[test]
+fn pressure_and_damping_stages_only_when_used_and_auto_falls_back_to_the_cpu() {
+    // A scene without pressure or damping (mass_damping = 0 included) pays for neither.
+    let plain = scene(4, 3, "upper", "method = \"lagrange\"")
+        .replace("mass_damping = 1.2e4", "mass_damping = 0.0");
+    let start = plain.find("[[pressure]]").expect("pressure table");
+    let end = plain[start..].find("[[boundary]]").expect("boundary table") + start;
+    let plain = format!("{}{}", &plain[..start], &plain[end..]);
+    let (_, model, plan) = build(&plain);
+    assert!(model.pressures.is_empty() && model.mass_damping == 0.0);
+    assert!(!plan.has(Stage::Pressure) && !plan.has(Stage::MassDamping));
+    assert_eq!(plan.pressure_nodes, 0);
+    assert_eq!(plan.cpu_only(), None, "contact runs on the GPU too");
+    // With both: the stages, in order, and the loaded nodes (the top edge: upper + 1 nodes).
+    let (_, _, plan) = build(&scene(4, 3, "upper", "method = \"lagrange\""));
+    let names = plan.to_string();
+    assert!(
+        names.contains("bulk_viscosity -> pressure -> stable_step -> mass_damping -> node_update"),
+        "{names}"
+    );
+    assert_eq!(plan.pressure_nodes, 4);
+    // `--backend auto` runs a pressure-only scene on the CPU with a notice naming the reason.
+    let dir = tmp_dir("patch-auto");
+    let file = dir.join("pressure_only.toml");
+    let no_contact = {
+        let s = scene(4, 3, "upper", "method = \"lagrange\"")
+            .replace("end_time = 1.0e-2", "end_time = 1.0e-4")
+            .replace("mass_damping = 1.2e4", "mass_damping = 0.0");
+        let start = s.find("[[contact]]").expect("contact table");
+        let end = s[start..].find("[[pressure]]").expect("pressure table") + start;
+        format!("{}{}", &s[..start], &s[end..])
+    };
+    std::fs::write(&file, no_contact).unwrap();
+    let out = dir.join("out");
+    let o = run_bin(&[
+        "run",
+        file.to_str().unwrap(),
+        "--backend",
+        "auto",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("pressure loads run on the CPU backend only"),
+        "{err}"
+    );
+    let check = run_bin(&["check", file.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        text.contains("pressure[0]: 2.1e8 Pa on 3 edges (4 nodes)"),
+        "{text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
