@@ -1094,9 +1094,4 @@ impl ContactSet {
         }
         t
     }
-
-    /// Names of the contacts and walls in interface order, with the number of interfaces.
-    pub fn interface_count(&self) -> usize {
-        self.interfaces.len()
-    }
 }

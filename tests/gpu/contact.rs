@@ -136,14 +136,8 @@ fn gpu_rod_against_a_target_of_1e4_times_its_area_matches_the_mismatch_formula()
 fn gpu_penalty_keeps_the_restitution_and_a_stiff_penalty_shortens_the_step() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    // omega dt = 0.3 as in the CPU test.
     let n = 80;
-    let h = L / n as f64;
-    let t = A / h;
-    let dt = 0.9 * h / bar_speed();
-    let m_node = 7850.0 * h * h * t / 4.0;
-    let k = (0.3 / dt) * (0.3 / dt) * m_node;
-    let s = k / (210e9 * t / 2.0);
+    let s = penalty_scale_for(n, 0.3);
     let text = rod_scene(
         n,
         Some(1.0),
@@ -188,15 +182,7 @@ fn gpu_penalty_keeps_the_restitution_and_a_stiff_penalty_shortens_the_step() {
     let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
     let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("run");
     let _ = std::fs::remove_dir_all(&dir);
-    assert_eq!(r.summary.status, "failed");
-    assert!(
-        r.summary.message.contains("exceeds the stable step")
-            && r.summary
-                .message
-                .contains("penalty springs of contact \"striker-target\""),
-        "{}",
-        r.summary.message
-    );
+    assert_penalty_step_refused(&r.summary);
 }
 
 #[test]

@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 use ricochet::model::Model;
+use ricochet::output::summary::Summary;
 use ricochet::step::Sample;
 
 /// Steel: Young's modulus (Pa) and density (kg/m^3).
@@ -210,3 +211,29 @@ pub const DISK_CASES: [(f64, f64, f64, f64); 2] = [
     (1.0, 89.5e-6, 2.25e6, 0.992),
     (10.0, 77.1e-6, 26.5e6, 0.980),
 ];
+
+/// The `penalty_scale` that gives omega dt = `omega_dt` for the rods of `rod_scene(n, Some(1.0), ..)`.
+/// Interface stiffness k = s K t L^2 / A_e with K = E/2 (plane stress, nu = 0) and square elements:
+/// k = s E t / 2 (two passes, half each), per face node k/2 against its partner:
+/// omega^2 = (k/2) (2 / m_node), m_node = rho h^2 t / 4.
+pub fn penalty_scale_for(n: usize, omega_dt: f64) -> f64 {
+    let h = L / n as f64;
+    let t = A / h;
+    let dt = 0.9 * h / bar_speed();
+    let m_node = RHO_STEEL * h * h * t / 4.0;
+    let omega = omega_dt / dt;
+    omega * omega * m_node / (E_STEEL * t / 2.0)
+}
+
+/// The run of a fixed step above the rods' penalty limit failed with the diagnostic naming it.
+pub fn assert_penalty_step_refused(summary: &Summary) {
+    assert_eq!(summary.status, "failed");
+    assert!(
+        summary.message.contains("exceeds the stable step")
+            && summary
+                .message
+                .contains("penalty springs of contact \"striker-target\""),
+        "{}",
+        summary.message
+    );
+}
