@@ -38,8 +38,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let dt = ctrl.dt_next;
     var work = 0.0;
     var vp = v_prev[c.node];
+    // The reaction acts on the masses of the update ((1 + c) m with mass damping).
+    let mr = c.mass * (1.0 + ctrl.damp_c);
     if ((c.mask & 1u) != 0u) {
-        work += c.mass * (c.vx - s.z) * c.vx;
+        work += mr * (c.vx - s.z) * c.vx;
         if (move_u) {
             s.x += dt * (c.vx - s.z);
         }
@@ -47,7 +49,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         vp.x = c.vx;
     }
     if ((c.mask & 2u) != 0u) {
-        work += c.mass * (c.vy - s.w) * c.vy;
+        work += mr * (c.vy - s.w) * c.vy;
         if (move_u) {
             s.y += dt * (c.vy - s.w);
         }

@@ -20,8 +20,8 @@ struct Params {
     sum_groups: u32,      // workgroups of all sum reductions together
     ticks_per_second: f32, // time is kept as a 64-bit count of ticks of end_time / 2^40
     penalty_dt: f32,      // stable step of the penalty springs alone (0: none)
-    _p0: u32,
-    _p1: u32,
+    mass_damping: f32,    // alpha of run.mass_damping (0: none)
+    loads: u32,           // 1: pressure or damping work is summed (sample_src after the constraints)
     _p2: u32,
 }
 
@@ -47,6 +47,8 @@ struct Control {
     dt_elem: u32,         // element that set the last stable step
     bad_element: atomic<u32>,
     bad_node: atomic<u32>,
+    damp_c: f32,          // c = alpha dt_n / 2 of mass damping this step (0 without, and on step 0):
+                          // the velocity update, boundaries and contact see the masses (1 + c) m
 }
 
 const FLAG_SAMPLE: u32 = 1u;

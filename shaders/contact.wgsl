@@ -60,7 +60,7 @@ struct Cons {
     w: f32,               // dt (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along n
     lambda: f32,
     pen: f32,             // penalty: penetration at u_n
-    _p1: f32,
+    dt_warm: f32,         // dt_n of the step that found lambda (Lagrange: the next step's warm start)
 }
 
 @group(0) @binding(0) var<uniform> cp: ContactParams;
@@ -81,6 +81,9 @@ struct Cons {
 // time since the last sample, then (work, this step's part after t_n).
 @group(0) @binding(14) var<storage, read_write> c_hist: array<f32>;
 
+// 1 / (1 + c): mass damping makes the update's masses (1 + c) m (see Control.damp_c).
+var<private> inv_scale: f32 = 1.0;
+
 var<workgroup> sh_u: u32;
 var<workgroup> sh_far: atomic<u32>;
 var<workgroup> sh_lagrange: atomic<u32>;
@@ -96,7 +99,7 @@ fn x_tr(i: u32, j: u32) -> vec2<f32> {
 }
 
 fn along(i: u32, n: vec2<f32>) -> f32 {
-    let im = c_ref[i].zw;
+    let im = c_ref[i].zw * inv_scale;
     return n.x * n.x * im.x + n.y * n.y * im.y;
 }
 
@@ -147,10 +150,10 @@ fn relative(c: Cons, s: u32) -> f32 {
 }
 
 fn apply(c: Cons, s: u32, lambda: f32) {
-    add_dv(s, lambda * c.n * c_ref[s].zw);
+    add_dv(s, lambda * inv_scale * c.n * c_ref[s].zw);
     if (c.a != NONE) {
-        add_dv(c.a, -(1.0 - c.xi) * lambda * c.n * c_ref[c.a].zw);
-        add_dv(c.b, -c.xi * lambda * c.n * c_ref[c.b].zw);
+        add_dv(c.a, -(1.0 - c.xi) * lambda * inv_scale * c.n * c_ref[c.a].zw);
+        add_dv(c.b, -c.xi * lambda * inv_scale * c.n * c_ref[c.b].zw);
     }
 }
 
@@ -311,6 +314,8 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>) {
     let dtn = ctrl.dt_node;
     let moving = (flags & FLAG_END) == 0u;
     let first = ctrl.step == 0u;
+    let mass_scale = 1.0 + ctrl.damp_c;
+    inv_scale = 1.0 / mass_scale;
     let h2 = 0.25 * cp.margin * cp.margin;
 
     // 1. Positions u_n and u_n + dt v of the free update; v^{n-1/2}; search due?
@@ -355,6 +360,14 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>) {
         } else {
             c = narrow_pass(k, sl, dt, dtn);
         }
+        // Warm start (as on the CPU): a Lagrange constraint of the slot that carried lambda last
+        // step starts from it, scaled by the ratio of the steps; a persistent contact (a pressure
+        // carried across an interface) then needs few sweeps instead of converging from zero.
+        let old = cons[k];
+        if (c.kind == KIND_LAGRANGE && old.kind == KIND_LAGRANGE && old.lambda > 0.0 && old.dt_warm > 0.0) {
+            c.lambda = old.lambda * (dtn / old.dt_warm);
+        }
+        c.dt_warm = dtn;
         cons[k] = c;
         if (c.kind == KIND_LAGRANGE) {
             atomicAdd(&sh_lagrange, 1u);
@@ -362,7 +375,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>) {
     }
     storageBarrier();
 
-    // 3. Penalty impulses, then the Lagrange sweeps, colour by colour.
+    // 3. Penalty impulses and the Lagrange warm starts, then the Lagrange sweeps, colour by colour.
     let cb = cp.color_base;
     let sb = cp.slot_base;
     for (var col = 0u; col < cp.n_colors; col++) {
@@ -370,7 +383,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>) {
         for (var q = search[cb + col] + l; q < end; q += RG) {
             let k = search[sb + q];
             let c = cons[k];
-            if (c.kind == KIND_PENALTY && c.lambda > 0.0) {
+            if (c.kind != KIND_NONE && c.lambda > 0.0) {
                 apply(c, slots[k].s, c.lambda);
             }
         }
@@ -432,7 +445,8 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>) {
         }
         let g = c_nodes[i].x;
         let m = bitcast<f32>(c_nodes[i].y);
-        let j = vec2<f32>(select(0.0, m * d.x, c_ref[i].z > 0.0), select(0.0, m * d.y, c_ref[i].w > 0.0));
+        let mu = mass_scale * m;
+        let j = vec2<f32>(select(0.0, mu * d.x, c_ref[i].z > 0.0), select(0.0, mu * d.y, c_ref[i].w > 0.0));
         work.x += 0.5 * dot(j, vl.zw + vn);
         work.y += 0.5 * dot(j, vn);
         var s = nodes[g];

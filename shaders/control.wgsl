@@ -121,6 +121,8 @@ fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
     }
     ctrl.dt_next = dt_next;
     ctrl.dt_elem = at;
+    // Mass damping from the second step on (the first half step stays undamped, as on the CPU).
+    ctrl.damp_c = select(0.0, 0.5 * params.mass_damping * ctrl.dt_node, ctrl.step > 0u);
 }
 
 @compute @workgroup_size(RG)
@@ -186,6 +188,13 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
             // Accumulated reaction work minus half of this step's (shared with the next interval).
             ext = sh_res[nb + 1u].x - 0.5 * sh_res[nb + 1u].y;
         }
+        var viscous = el.w;
+        if (params.loads != 0u) {
+            // Pressure and damping work (accumulated, and this step's part after t_n; loads.wgsl).
+            let w = sh_res[nb + select(1u, 2u, params.n_cons > 0u)];
+            ext += w.x - w.y;
+            viscous -= w.z - w.w;
+        }
         history[base + 0u] = bitcast<f32>(ctrl.t_lo);
         history[base + 1u] = bitcast<f32>(ctrl.t_hi);
         history[base + 2u] = bitcast<f32>(ctrl.step);
@@ -193,7 +202,7 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
         history[base + 4u] = ke;
         history[base + 5u] = el.x;
         history[base + 6u] = el.y + el.z;
-        history[base + 7u] = el.w;
+        history[base + 7u] = viscous;
         history[base + 8u] = ext;
         ctrl.rows += 1u;
         while (ctrl.next_sample < params.n_sample_times && due(times[ctrl.next_sample])) {

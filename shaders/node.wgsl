@@ -17,6 +17,9 @@ override WG: u32 = 64u;
 //#if fields
 @group(0) @binding(9) var<storage, read_write> u_snap: array<vec2<f32>>;
 //#endif
+//#if loads
+@group(0) @binding(10) var<storage, read_write> v_old: array<vec2<f32>>;  // v^{n-1/2}, for loads.wgsl
+//#endif
 
 @compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -34,7 +37,15 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let s = nodes[i];
     let vm = s.zw;
+//#if loads
+    // Pressure forces arrive through slots past the elements' (see loads.wgsl). Mass damping:
+    // (1 + c) m v+ = (1 - c) m v- + dt_n f, c = alpha dt_n / 2 (implicit in v, stable for any alpha).
+    v_old[i] = vm;
+    let c = ctrl.damp_c;
+    let vp = ((1.0 - c) / (1.0 + c)) * vm + (ctrl.dt_node * inv_mass[i] / (1.0 + c)) * f;
+//#else
     let vp = vm + (ctrl.dt_node * inv_mass[i]) * f;
+//#endif
     if (not_finite(vp.x) || not_finite(vp.y)) {
         atomicMin(&ctrl.bad_node, i);
     }

@@ -202,13 +202,6 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             };
             let mut solver: Box<dyn Solver> = match backend {
                 Backend::Cpu => cpu(),
-                Backend::Auto if plan.cpu_only().is_some() => {
-                    eprintln!(
-                        "notice: {} run on the CPU backend only for now; running on the CPU",
-                        plan.cpu_only().unwrap_or("this scene's stages")
-                    );
-                    cpu()
-                }
                 Backend::Auto => match GpuContext::new(adapter.as_deref()) {
                     Ok(ctx) => Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?),
                     Err(e) => {

@@ -138,18 +138,6 @@ impl Plan {
         self.stages.contains(&stage)
     }
 
-    /// Why the plan runs on the CPU backend only, if it does: the stages the GPU kernels do not
-    /// implement yet (pressure loads, mass damping).
-    pub fn cpu_only(&self) -> Option<&'static str> {
-        if self.has(Stage::Pressure) {
-            Some("pressure loads")
-        } else if self.has(Stage::MassDamping) {
-            Some("mass damping")
-        } else {
-            None
-        }
-    }
-
     /// Whether any element keeps dissipative state between steps (viscous hourglass or bulk viscosity).
     pub fn has_dissipation(&self) -> bool {
         self.has(Stage::HourglassViscous) || self.has(Stage::BulkViscosity)

@@ -81,6 +81,23 @@ fn variants_compile_only_what_the_scene_needs() {
         !node.contains("u_snap"),
         "no snapshot buffer without fields"
     );
+    assert!(
+        !node.contains("v_old") && !node.contains("damp_c *"),
+        "no load variant"
+    );
+    let loaded = shader::source(
+        ricochet::gpu::node::SOURCE,
+        Features {
+            loads: true,
+            ..Features::default()
+        },
+    );
+    assert!(loaded.contains("v_old") && loaded.contains("ctrl.damp_c"));
+    assert_eq!(
+        loaded.matches("let vp =").count(),
+        1,
+        "exactly one branch of //#if loads ... //#else ... //#endif"
+    );
 }
 
 /// A scene of `n` x `m` distorted elements with all material and hourglass variants.
@@ -467,28 +484,58 @@ fn unstable_gpu_run_stops_with_a_diagnostic() {
     );
 }
 
+/// The vibrating block with a pressure load on its top edge (ramped over 1 ms), mass damping, or both.
+fn loaded_block(pressure: bool, damping: bool) -> String {
+    let mut text = asset("vibrating_block.toml");
+    if damping {
+        let damped = text.replacen("[run]\n", "[run]\nmass_damping = 2000.0\n", 1);
+        assert_ne!(damped, text);
+        text = damped;
+    }
+    if pressure {
+        text.push_str(
+            "\n[[pressure]]\nbody = \"block\"\nregion = { min = [-0.01, 0.049], max = [0.11, 0.051] }\n\
+             value = 1.0e8\nramp = 1.0e-3\n",
+        );
+    }
+    text
+}
+
 #[test]
-fn pressure_and_damping_scenes_are_refused_by_the_gpu_backend_with_a_clear_error() {
+fn parity_pressure_load() {
+    // The external column carries the pressure work on both backends (the energy comparison).
+    parity("pressure", &loaded_block(true, false));
+}
+
+#[test]
+fn parity_mass_damping() {
+    // The viscous column carries the damping work on both backends.
+    parity("damping", &loaded_block(false, true));
+}
+
+#[test]
+fn parity_pressure_load_with_mass_damping() {
+    parity("pressure+damping", &loaded_block(true, true));
+}
+
+#[test]
+fn pressure_and_damping_compile_their_kernels_only_when_used() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let base = asset("vibrating_block.toml");
-    let pressure = format!(
-        "{base}\n[[pressure]]\nbody = \"block\"\nregion = {{ min = [-0.01, 0.049], max = [0.11, 0.051] }}\nvalue = 1.0e6\n"
-    );
-    let damped = base.replacen("[run]\n", "[run]\nmass_damping = 100.0\n", 1);
-    assert_ne!(damped, base);
-    for (text, what) in [(pressure, "pressure loads"), (damped, "mass damping")] {
-        let (scene, model, plan) = load(&text, "cpu_only");
-        assert_eq!(plan.cpu_only(), Some(what));
-        match GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)) {
-            Ok(_) => panic!("a scene with {what} must not run on the GPU"),
-            Err(e) => {
-                let m = e.to_string();
-                assert!(m.contains("CPU backend only") && m.contains(what), "{m}");
-            }
-        }
+    for (pressure, damping) in [(false, false), (true, false), (false, true), (true, true)] {
+        let (scene, model, plan) = load(&loaded_block(pressure, damping), "loads");
+        let gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu solver");
+        let names: Vec<&str> = gpu.state().allocated.iter().map(|(n, _)| *n).collect();
+        let k = gpu.kernels();
+        assert_eq!(k.pressure.is_some(), pressure, "{names:?}");
+        assert_eq!(k.load_work.is_some(), pressure || damping);
+        assert_eq!(k.features.loads, pressure || damping);
+        assert_eq!(names.contains(&"pressure_entries"), pressure, "{names:?}");
+        assert_eq!(names.contains(&"v_old"), pressure || damping, "{names:?}");
     }
 }
 
 #[path = "gpu/contact.rs"]
 mod contact;
+#[path = "gpu/patch.rs"]
+mod patch;

@@ -4,7 +4,7 @@
 use std::borrow::Cow;
 
 pub use super::shader::Features;
-use super::{boundary, contact, control, element, node, reduce, shader};
+use super::{boundary, contact, control, element, loads, node, reduce, shader};
 
 /// Compute pipelines for one combination of features.
 #[derive(Debug)]
@@ -23,6 +23,10 @@ pub struct Kernels {
     pub boundary: Option<wgpu::ComputePipeline>,
     /// Contact (only for scenes with contact or rigid walls).
     pub contact: Option<wgpu::ComputePipeline>,
+    /// Pressure forces (only for scenes with pressure loads).
+    pub pressure: Option<wgpu::ComputePipeline>,
+    /// Work of pressure and damping impulses (only for scenes with either; `features.loads`).
+    pub load_work: Option<wgpu::ComputePipeline>,
     /// First level of the sample sums.
     pub sum: wgpu::ComputePipeline,
     /// Second level of the sums, history row, time and flags.
@@ -31,7 +35,13 @@ pub struct Kernels {
 
 impl Kernels {
     /// Compiles the kernels a scene needs.
-    pub fn new(device: &wgpu::Device, features: Features, boundaries: bool, contact: bool) -> Self {
+    pub fn new(
+        device: &wgpu::Device,
+        features: Features,
+        boundaries: bool,
+        contact: bool,
+        pressure: bool,
+    ) -> Self {
         Self {
             features,
             element: element::pipeline(device, features),
@@ -40,15 +50,20 @@ impl Kernels {
             node: node::pipeline(device, features),
             boundary: boundaries.then(|| boundary::pipeline(device, features)),
             contact: contact.then(|| contact::pipeline(device, features)),
+            pressure: pressure.then(|| loads::pressure_pipeline(device, features)),
+            load_work: features
+                .loads
+                .then(|| loads::work_pipeline(device, features)),
             sum: reduce::sum_pipeline(device, features),
             control_end: control::end_pipeline(device, features),
         }
     }
 
     /// Every kernel source with its name, for validation.
-    pub fn sources() -> [(&'static str, &'static str); 6] {
+    pub fn sources() -> [(&'static str, &'static str); 7] {
         [
             ("contact", contact::SOURCE),
+            ("loads", loads::SOURCE),
             ("element", element::SOURCE),
             ("node", node::SOURCE),
             ("boundary", boundary::SOURCE),

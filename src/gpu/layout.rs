@@ -26,7 +26,9 @@ pub struct Params {
     pub sum_groups: u32,
     pub ticks_per_second: f32,
     pub penalty_dt: f32,
-    pub _pad: [u32; 3],
+    pub mass_damping: f32,
+    pub loads: u32,
+    pub _pad: u32,
 }
 
 /// Mirror of WGSL `Control`: the run state advanced on the GPU.
@@ -53,6 +55,7 @@ pub struct Control {
     pub dt_elem: u32,
     pub bad_element: u32,
     pub bad_node: u32,
+    pub damp_c: f32,
 }
 
 /// Byte offset of `Control::state`, for un-pausing with a 4-byte write.
@@ -134,7 +137,7 @@ pub const NONE: u32 = u32::MAX;
 pub const MAX_INSTANCES: usize = 72;
 
 const _: () = assert!(std::mem::size_of::<Params>() == 80);
-const _: () = assert!(std::mem::size_of::<Control>() == 80);
+const _: () = assert!(std::mem::size_of::<Control>() == 84);
 const _: () = assert!(std::mem::size_of::<Instance>() == 32);
 const _: () = assert!(std::mem::size_of::<GpuBody>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuElement>() == 64);

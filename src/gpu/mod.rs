@@ -3,7 +3,8 @@
 //! Kernels (one `.wgsl` in `shaders/` beside each `.rs` here): [`element`] (stress and forces per
 //! element), [`reduce`] (stable-step minimum, sample sums), [`control`] (step control on the GPU),
 //! [`node`] (gather, central-difference update, energies on sample steps), [`boundary`]
-//! (prescribed velocities). [`kernels::Kernels`] holds the compiled pipelines,
+//! (prescribed velocities), [`loads`] (pressure loads, mass-damping work), [`contact`] (narrow
+//! phase and contact correction). [`kernels::Kernels`] holds the compiled pipelines,
 //! [`state::GpuState`] the buffers, [`solver::GpuSolver`] drives them in batches of steps.
 //! All sums are gathers or fixed-order trees: the same scene on the same adapter gives the same bits.
 
@@ -14,6 +15,7 @@ pub mod control;
 pub mod element;
 pub mod kernels;
 pub mod layout;
+pub mod loads;
 pub mod node;
 pub mod reduce;
 pub mod shader;

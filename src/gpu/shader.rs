@@ -1,5 +1,5 @@
 //! WGSL sources: each kernel's file with `shaders/common.wgsl` prepended, and `//#if NAME` ...
-//! `//#endif` blocks kept only for the features a scene needs (so a scene without, say, velocity
+//! `//#else` / `//#endif` blocks kept only for the features a scene needs (so a scene without, say, velocity
 //! boundaries compiles no binding for them).
 
 use crate::error::{Error, Result};
@@ -14,6 +14,8 @@ pub struct Features {
     pub dissipation: bool,
     /// Field snapshots.
     pub fields: bool,
+    /// Pressure loads or mass damping: the node stage keeps v^{n-1/2} for their work (and damps).
+    pub loads: bool,
     /// Threads per workgroup of the reductions and control kernels (WGSL `RG`): 256 on GPUs,
     /// 64 on CPU adapters such as lavapipe, where each barrier costs a coroutine switch per lane group.
     pub reduce_group: u32,
@@ -24,6 +26,7 @@ impl Default for Features {
         Self {
             dissipation: false,
             fields: false,
+            loads: false,
             reduce_group: 256,
         }
     }
@@ -34,6 +37,7 @@ impl Features {
         match name {
             "dissipation" => self.dissipation,
             "fields" => self.fields,
+            "loads" => self.loads,
             _ => false,
         }
     }
@@ -43,12 +47,15 @@ impl Features {
         let mut v = Vec::new();
         for dissipation in [false, true] {
             for fields in [false, true] {
-                for reduce_group in [64, 256] {
-                    v.push(Features {
-                        dissipation,
-                        fields,
-                        reduce_group,
-                    });
+                for loads in [false, true] {
+                    for reduce_group in [64, 256] {
+                        v.push(Features {
+                            dissipation,
+                            fields,
+                            loads,
+                            reduce_group,
+                        });
+                    }
                 }
             }
         }
@@ -67,6 +74,14 @@ pub fn source(kernel: &str, features: Features) -> String {
         if let Some(name) = t.strip_prefix("//#if ") {
             let outer = *keep.last().unwrap_or(&true);
             keep.push(outer && features.enabled(name.trim()));
+            continue;
+        }
+        if t == "//#else" {
+            if keep.len() > 1 {
+                let inner = keep.pop().unwrap_or(true);
+                let outer = *keep.last().unwrap_or(&true);
+                keep.push(outer && !inner);
+            }
             continue;
         }
         if t == "//#endif" {

@@ -99,15 +99,10 @@ impl GpuSolver {
         schedule: Schedule,
         fused: Option<bool>,
     ) -> Result<Self> {
-        if let Some(what) = plan.cpu_only() {
-            return Err(Error::Gpu(format!(
-                "{what} run on the CPU backend only for now (`--backend cpu`); \
-                 the GPU kernels for them are not written yet"
-            )));
-        }
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
+            loads: plan.has(Stage::Pressure) || plan.has(Stage::MassDamping),
             reduce_group: if ctx.info.device_type == wgpu::DeviceType::Cpu {
                 64
             } else {
@@ -121,6 +116,7 @@ impl GpuSolver {
             features,
             plan.has(Stage::VelocityBoundaries),
             plan.has(Stage::Contact),
+            plan.has(Stage::Pressure),
         );
         let state = GpuState::new(device, &kernels, model, plan, &schedule, fused);
         if let Some(e) = pollster::block_on(scope.pop()) {

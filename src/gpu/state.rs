@@ -12,7 +12,7 @@ use crate::step::Schedule;
 use super::contact::{ContactState, Shared};
 use super::kernels::Kernels;
 use super::layout::*;
-use super::{boundary, element, node, reduce};
+use super::{boundary, element, loads, node, reduce};
 use crate::contact::ContactSet;
 
 /// Nodes + elements + constraints up to which a CPU adapter reduces in one workgroup.
@@ -47,6 +47,7 @@ struct Groups {
     element: u32,
     node: u32,
     boundary: u32,
+    pressure: u32,
 }
 
 #[derive(Debug)]
@@ -56,6 +57,8 @@ struct Binds {
     control_dt: wgpu::BindGroup,
     node: wgpu::BindGroup,
     boundary: Option<wgpu::BindGroup>,
+    pressure: Option<wgpu::BindGroup>,
+    load_work: Option<wgpu::BindGroup>,
     sum: wgpu::BindGroup,
     control_end: wgpu::BindGroup,
 }
@@ -228,7 +231,19 @@ impl GpuState {
             .map(|v| [0.0, 0.0, v[0] as f32, v[1] as f32])
             .collect();
         let inv_mass: Vec<f32> = model.mass.iter().map(|m| (1.0 / m) as f32).collect();
-        let (offsets, slots) = node::adjacency(&model.quads, nn);
+        // Pressure entries (their forces go to slots past the elements' and are gathered after them).
+        let press = if plan.has(Stage::Pressure) {
+            loads::pressure_entries(model)
+        } else {
+            Vec::new()
+        };
+        let np = press.len();
+        let press_nodes: Vec<u32> = press.iter().map(|(n, _)| *n).collect();
+        let press_data: Vec<loads::GpuPressureEntry> = press.iter().map(|(_, e)| *e).collect();
+        let (offsets, slots) = node::adjacency(&model.quads, nn, &press_nodes);
+        // Pressure and damping work: one accumulator per node after the constraints' (loads.wgsl).
+        let has_loads = kernels.features.loads;
+        let nl = if has_loads { nn } else { 0 };
 
         // Sample instances: one per body (its nodes), the elements, the constraints.
         let rg = kernels.features.reduce_group;
@@ -253,9 +268,12 @@ impl GpuState {
         if nc > 0 {
             push(nn + ne, nc, 1.0);
         }
+        if has_loads {
+            push(nn + ne + nc, nl, 1.0);
+        }
         // Small models on CPU adapters: the control workgroup reduces directly (see control.wgsl).
-        let fused =
-            fused.unwrap_or(kernels.features.reduce_group == 64 && nn + ne + nc <= FUSED_LIMIT);
+        let fused = fused
+            .unwrap_or(kernels.features.reduce_group == 64 && nn + ne + nc + nl <= FUSED_LIMIT);
         let sum_groups = if fused { 0 } else { first };
 
         let contact_set = if plan.has(Stage::Contact) {
@@ -295,7 +313,9 @@ impl GpuState {
                 .as_ref()
                 .and_then(|c| c.penalty_step())
                 .map_or(0.0, |(d, _)| d as f32),
-            _pad: [0; 3],
+            mass_damping: model.mass_damping as f32,
+            loads: u32::from(has_loads),
+            _pad: 0,
         };
         let control = Control {
             flags: FLAG_SAMPLE
@@ -327,7 +347,19 @@ impl GpuState {
         let inv_mass_buf = a.init("inv_mass", bytemuck::cast_slice(&inv_mass), storage);
         let offsets_buf = a.init("adjacency_offsets", bytemuck::cast_slice(&offsets), storage);
         let slots_buf = a.init("adjacency_slots", bytemuck::cast_slice(&slots), storage);
-        let elem_force = a.zeroed("element_forces", 32 * ne as u64, storage | U::COPY_SRC);
+        let elem_force = a.zeroed(
+            "element_forces",
+            32 * ne as u64 + 8 * np as u64,
+            storage | U::COPY_SRC,
+        );
+        let press_buf = (np > 0).then(|| {
+            a.init(
+                "pressure_entries",
+                bytemuck::cast_slice(&press_data),
+                storage,
+            )
+        });
+        let v_old = has_loads.then(|| a.zeroed("v_old", 8 * nn as u64, storage));
         let elem_dt = a.zeroed("element_dt", 4 * ne as u64, storage | U::COPY_SRC);
         let elem_state = plan
             .has_dissipation()
@@ -349,7 +381,7 @@ impl GpuState {
             .collect();
         let cons_buf =
             (nc > 0).then(|| a.init("constraints", bytemuck::cast_slice(&cons), storage));
-        let sample_src = a.zeroed("sample_sources", 16 * (nn + ne + nc) as u64, storage);
+        let sample_src = a.zeroed("sample_sources", 16 * (nn + ne + nc + nl) as u64, storage);
         let dt_partial = a.zeroed("dt_partials", 8 * reduce::groups(ne, rg) as u64, storage);
         let instances_buf = a.init("instances", bytemuck::cast_slice(&instances), storage);
         let sum_partial = a.zeroed("sum_partials", 16 * first as u64, storage);
@@ -412,6 +444,9 @@ impl GpuState {
         if let Some(s) = &u_snap {
             nd.push((9, s));
         }
+        if let Some(s) = &v_old {
+            nd.push((10, s));
+        }
         let bind = Binds {
             element: bind(device, "element", &kernels.element, &el),
             min_dt: bind(
@@ -444,6 +479,34 @@ impl GpuState {
                         (3, &v_prev),
                         (4, &sample_src),
                         (5, &ctrl),
+                    ],
+                )),
+                _ => None,
+            },
+            pressure: match (&kernels.pressure, &press_buf) {
+                (Some(p), Some(e)) => Some(bind(
+                    device,
+                    "pressure_force",
+                    p,
+                    &[(0, &params_buf), (1, &ctrl), (2, e), (3, &elem_force)],
+                )),
+                _ => None,
+            },
+            load_work: match (&kernels.load_work, &v_old) {
+                (Some(p), Some(vo)) => Some(bind(
+                    device,
+                    "load_work",
+                    p,
+                    &[
+                        (0, &params_buf),
+                        (1, &ctrl),
+                        (3, &elem_force),
+                        (4, &nodes),
+                        (5, &inv_mass_buf),
+                        (6, &offsets_buf),
+                        (7, &slots_buf),
+                        (8, vo),
+                        (9, &sample_src),
                     ],
                 )),
                 _ => None,
@@ -491,6 +554,7 @@ impl GpuState {
                 element: (ne as u32).div_ceil(element::WORKGROUP),
                 node: (nn as u32).div_ceil(node::WORKGROUP),
                 boundary: (nc as u32).div_ceil(boundary::WORKGROUP),
+                pressure: (np as u32).div_ceil(loads::WORKGROUP),
             },
             bind,
         })
@@ -510,6 +574,11 @@ impl GpuState {
         pass.set_pipeline(&kernels.control_dt);
         pass.set_bind_group(0, &b.control_dt, &[]);
         pass.dispatch_workgroups(1, 1, 1);
+        if let (Some(p), Some(bg)) = (&kernels.pressure, &b.pressure) {
+            pass.set_pipeline(p);
+            pass.set_bind_group(0, bg, &[]);
+            pass.dispatch_workgroups(self.groups.pressure, 1, 1);
+        }
         pass.set_pipeline(&kernels.node);
         pass.set_bind_group(0, &b.node, &[]);
         pass.dispatch_workgroups(self.groups.node, 1, 1);
@@ -521,7 +590,7 @@ impl GpuState {
         self.record_tail(kernels, pass);
     }
 
-    /// Records the end of a step from the contact stage on: contact, sample sums, control.
+    /// Records the end of a step from the contact stage on: contact, load work, sample sums, control.
     /// (After a search stopped a step in its contact stage, the host resumes it with this.)
     pub fn record_tail(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
         let b = &self.bind;
@@ -529,6 +598,11 @@ impl GpuState {
             pass.set_pipeline(p);
             pass.set_bind_group(0, &c.bind, &[]);
             pass.dispatch_workgroups(1, 1, 1);
+        }
+        if let (Some(p), Some(bg)) = (&kernels.load_work, &b.load_work) {
+            pass.set_pipeline(p);
+            pass.set_bind_group(0, bg, &[]);
+            pass.dispatch_workgroups(self.groups.node, 1, 1);
         }
         if self.params.sum_groups > 0 {
             pass.set_pipeline(&kernels.sum);

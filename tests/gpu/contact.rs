@@ -255,6 +255,14 @@ fn gpu_contact_runs_are_bit_identical_run_to_run() {
             "disk",
             disk_text(10.0).replace("end_time = 1.6e-4", "end_time = 4.0e-5"),
         ),
+        (
+            // Pressure, mass damping and two-pass Lagrange contact with warm starts.
+            "patch",
+            std::fs::read_to_string(
+                std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/patch_test.toml"),
+            )
+            .expect("patch asset"),
+        ),
     ] {
         let (scene, model, plan) = load(&text, name);
         let mut outs = Vec::new();
