@@ -44,6 +44,9 @@ pub enum Error {
     /// A benchmark run did not take the steps it was asked to (the scene stopped early).
     #[error("bench: {0}")]
     Bench(String),
+    /// The verification suite could not be run (a case file, a run or a report).
+    #[error("verify: {0}")]
+    Verify(String),
     /// The GPU backend could not be used.
     #[error("GPU: {0}")]
     Gpu(String),

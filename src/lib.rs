@@ -22,5 +22,6 @@ pub mod plan;
 pub mod run;
 pub mod scene;
 pub mod step;
+pub mod verify;
 
 pub use error::{Error, Result};

@@ -1,4 +1,4 @@
-//! The `ricochet` command line: `run`, `check` and `bench`.
+//! The `ricochet` command line: `run`, `check`, `bench` and `verify`.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -90,12 +90,46 @@ enum Command {
         /// Scene file (TOML).
         scene: PathBuf,
     },
+    /// Run the verification suite (assets/verification/): error against wall time per case,
+    /// method and backend; writes results.csv, report.md and one plot per case.
+    Verify {
+        /// The short ladders (a few minutes on a 2-core machine).
+        #[arg(long)]
+        quick: bool,
+        /// Backend(s).
+        #[arg(long, value_enum, default_value = "both")]
+        backend: VerifyBackend,
+        /// Output folder.
+        #[arg(long, default_value = "out/verification")]
+        out: PathBuf,
+        /// Folder of the case files.
+        #[arg(long, default_value = "assets/verification")]
+        cases: PathBuf,
+        /// Only these cases (by name); all when omitted.
+        #[arg(long, num_args = 1..)]
+        case: Vec<String>,
+        /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
+        #[arg(long)]
+        adapter: Option<String>,
+    },
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum VerifyBackend {
+    /// The f64 CPU reference.
+    Cpu,
+    /// The GPU (an adapter is required).
+    Gpu,
+    /// Both, in the same run (an adapter is required).
+    Both,
 }
 
 /// Exit status for bad input.
 const EXIT_INPUT: u8 = 2;
 /// Exit status for a run that went unstable.
 const EXIT_FAILED_RUN: u8 = 3;
+/// Exit status of `verify` when a case misses its bound.
+const EXIT_VERIFY_FAILED: u8 = 4;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -181,6 +215,45 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     .with_context(|| format!("writing {}", path.display()))?;
             }
             Ok(ExitCode::SUCCESS)
+        }
+        Command::Verify {
+            quick,
+            backend,
+            out,
+            cases,
+            case,
+            adapter,
+        } => {
+            let opts = ricochet::verify::Options {
+                quick,
+                cpu: backend != VerifyBackend::Gpu,
+                gpu: backend != VerifyBackend::Cpu,
+                cases,
+                only: case,
+                out,
+                adapter: adapter.or_else(|| std::env::var("WGPU_ADAPTER_NAME").ok()),
+            };
+            let outcome = ricochet::verify::verify(&opts, |line| eprintln!("{line}"))?;
+            println!(
+                "verify: {} cases, {} runs, report {}",
+                outcome.cases.len(),
+                outcome
+                    .rows
+                    .iter()
+                    .map(|r| (&r.case, &r.method, &r.backend, r.level))
+                    .collect::<std::collections::BTreeSet<_>>()
+                    .len(),
+                opts.out.join("report.md").display()
+            );
+            if outcome.failures.is_empty() {
+                println!("all cases pass their bounds");
+                Ok(ExitCode::SUCCESS)
+            } else {
+                for f in &outcome.failures {
+                    println!("FAILED {f}");
+                }
+                Ok(ExitCode::from(EXIT_VERIFY_FAILED))
+            }
         }
         Command::Check { scene } => {
             let (scene, model, plan) = load(&scene, None)?;

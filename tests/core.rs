@@ -14,7 +14,8 @@
 //! - [`contact`]: rod impact (Lagrange, penalty, rigid wall, impedance mismatch), corner-first
 //!   square on a wall, the contact plan and history columns;
 //! - [`bad_input`]: every rejected scene exits with status 2 and names the file, key and value;
-//! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs.
+//! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs;
+//! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound.
 
 #[path = "core/common.rs"]
 mod common;
@@ -37,5 +38,7 @@ mod patch;
 mod patch_contact;
 #[path = "core/rigid.rs"]
 mod rigid;
+#[path = "core/verify_cases.rs"]
+mod verify_cases;
 #[path = "core/wave.rs"]
 mod wave;

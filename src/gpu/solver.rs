@@ -649,6 +649,10 @@ impl Solver for GpuSolver {
         self.ctx.adapter_name()
     }
 
+    fn displacement_now(&mut self) -> Result<Vec<[f64; 2]>> {
+        Ok(self.nodes()?.0)
+    }
+
     fn counters(&self) -> Counters {
         Counters {
             contact_searches: self.state.contact.as_ref().map_or(0, |c| c.searches),

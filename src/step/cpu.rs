@@ -571,4 +571,8 @@ impl Solver for CpuSolver {
     fn adapter(&self) -> String {
         "CPU reference (f64, 1 thread)".to_string()
     }
+
+    fn displacement_now(&mut self) -> Result<Vec<[f64; 2]>> {
+        Ok(self.displacement().to_vec())
+    }
 }

@@ -177,6 +177,13 @@ pub struct Counters {
 
 /// A time integrator of a model: the CPU reference or the GPU backend.
 pub trait Solver {
+    /// The nodal displacement at the solver's current time (read back from the device on the
+    /// GPU), for post-processing such as element stresses after a run.
+    ///
+    /// # Errors
+    /// A failed device readback.
+    fn displacement_now(&mut self) -> Result<Vec<[f64; 2]>>;
+
     /// Advances at least one step, until one or more events happened, and appends them.
     ///
     /// # Errors

@@ -1,0 +1,340 @@
+//! `ricochet verify`: runs the verification cases of `assets/verification/` (REFERENCES.md
+//! sections 1-5) over a refinement ladder, per contact method and backend, and records for each
+//! run the error of each metric against its reference, the wall time, the steps and element-cycles
+//! and the energy-balance error. Writes `results.csv`, `report.md` (tables, observed convergence
+//! orders, pass/fail against each case's bounds) and a log-log plot of error against wall time
+//! per case (`<case>.svg` and `.png`).
+
+pub mod case;
+pub mod metric;
+pub mod plot;
+pub mod report;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::error::{Error, Result};
+use crate::gpu::{GpuContext, GpuSolver};
+use crate::model::Model;
+use crate::plan::Plan;
+use crate::run::{run, schedule};
+use crate::scene::Scene;
+use crate::step::cpu::CpuSolver;
+use crate::step::Solver;
+
+pub use case::Case;
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// The short ladders instead of the full ones.
+    pub quick: bool,
+    /// Run on the CPU reference.
+    pub cpu: bool,
+    /// Run on the GPU (an adapter is required).
+    pub gpu: bool,
+    /// Folder of the case files.
+    pub cases: PathBuf,
+    /// Only the cases with these names (all when empty).
+    pub only: Vec<String>,
+    /// Output folder.
+    pub out: PathBuf,
+    /// GPU adapter name substring.
+    pub adapter: Option<String>,
+}
+
+/// One metric of one run.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// Case name.
+    pub case: String,
+    /// Contact method.
+    pub method: String,
+    /// "cpu" or "gpu".
+    pub backend: String,
+    /// Level index in the ladder (0 = coarsest).
+    pub level: usize,
+    /// The level's refinement (the case's `size` variable).
+    pub size: f64,
+    /// Elements.
+    pub elements: usize,
+    /// Steps taken.
+    pub steps: u64,
+    /// Wall seconds of the time loop.
+    pub wall_seconds: f64,
+    /// Largest energy-balance error of the run.
+    pub energy_error: f64,
+    /// Metric name.
+    pub metric: String,
+    /// Reference value.
+    pub reference: f64,
+    /// Measured value (NaN when the run failed or the metric could not be measured).
+    pub value: f64,
+    /// |value - reference| / scale.
+    pub relative_error: f64,
+    /// The pass bound, when this row is judged.
+    pub bound: Option<f64>,
+    /// Whether the judged row passed.
+    pub pass: Option<bool>,
+    /// Why the value is missing, if it is.
+    pub note: String,
+}
+
+/// The suite's results.
+#[derive(Debug, Clone, Default)]
+pub struct Outcome {
+    /// Every metric of every run.
+    pub rows: Vec<Row>,
+    /// The cases in the order run.
+    pub cases: Vec<Case>,
+    /// The adapters used ("cpu" / "gpu" -> name).
+    pub adapters: Vec<(String, String)>,
+    /// Failures: the case, method, backend, metric, value and bound.
+    pub failures: Vec<String>,
+}
+
+/// Reads the case files of `dir` (sorted by file name).
+///
+/// # Errors
+/// [`Error::Read`] for an unreadable folder, or the error of the first bad case file.
+pub fn read_cases(dir: &Path) -> Result<Vec<Case>> {
+    let entries = std::fs::read_dir(dir).map_err(|source| Error::Read {
+        file: dir.to_path_buf(),
+        source,
+    })?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    files.iter().map(|f| Case::read(f)).collect()
+}
+
+/// Runs the suite and writes its outputs into `opts.out`; `log` gets one line per run.
+///
+/// # Errors
+/// Bad case files, a missing adapter with `gpu`, or outputs that cannot be written. Runs that fail
+/// or miss their bounds are not errors: they are in [`Outcome::failures`].
+pub fn verify(opts: &Options, mut log: impl FnMut(&str)) -> Result<Outcome> {
+    let mut cases = read_cases(&opts.cases)?;
+    if !opts.only.is_empty() {
+        for name in &opts.only {
+            if !cases.iter().any(|c| &c.case.name == name) {
+                return Err(Error::Verify(format!(
+                    "no case named {name:?} in {}",
+                    opts.cases.display()
+                )));
+            }
+        }
+        cases.retain(|c| opts.only.contains(&c.case.name));
+    }
+    let ctx = if opts.gpu {
+        Some(Arc::new(GpuContext::new(opts.adapter.as_deref())?))
+    } else {
+        None
+    };
+    std::fs::create_dir_all(&opts.out).map_err(|source| Error::Write {
+        path: opts.out.clone(),
+        source,
+    })?;
+    let mut out = Outcome::default();
+    if opts.cpu {
+        out.adapters
+            .push(("cpu".into(), "CPU reference (f64, 1 thread)".into()));
+    }
+    if let Some(c) = &ctx {
+        out.adapters.push(("gpu".into(), c.adapter_name()));
+    }
+    let scratch = opts.out.join("runs");
+    for case in &cases {
+        let levels = if opts.quick {
+            &case.levels.quick
+        } else {
+            &case.levels.full
+        };
+        for method in &case.case.methods {
+            let mut backends: Vec<Option<Arc<GpuContext>>> = Vec::new();
+            if opts.cpu {
+                backends.push(None);
+            }
+            if let Some(c) = &ctx {
+                backends.push(Some(c.clone()));
+            }
+            for backend in backends {
+                let bname = if backend.is_some() { "gpu" } else { "cpu" };
+                for (i, level) in levels.iter().enumerate() {
+                    let rows = run_one(case, method, backend.clone(), i, level, &scratch)?;
+                    let first = rows.first();
+                    log(&format!(
+                        "{} {method} {bname} level {i} ({} = {}): {} elements, {} steps, {:.3} s{}",
+                        case.case.name,
+                        case.case.size,
+                        level.get(&case.case.size).copied().unwrap_or(0.0),
+                        first.map_or(0, |r| r.elements),
+                        first.map_or(0, |r| r.steps),
+                        first.map_or(0.0, |r| r.wall_seconds),
+                        first
+                            .filter(|r| !r.note.is_empty())
+                            .map_or(String::new(), |r| format!(": {}", r.note))
+                    ));
+                    out.rows.extend(rows);
+                }
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&scratch);
+    judge(&cases, &mut out, levels_count(&cases, opts.quick));
+    out.cases = cases;
+    report::write_csv(&opts.out.join("results.csv"), &out.rows)?;
+    for case in &out.cases {
+        plot::error_vs_time(&opts.out, case, &out.rows)?;
+    }
+    report::write_markdown(&opts.out.join("report.md"), &out, opts)?;
+    Ok(out)
+}
+
+type Ladder = Vec<std::collections::BTreeMap<String, f64>>;
+
+fn levels_count(cases: &[Case], quick: bool) -> Vec<(usize, Ladder)> {
+    cases
+        .iter()
+        .map(|c| {
+            let l = if quick {
+                c.levels.quick.clone()
+            } else {
+                c.levels.full.clone()
+            };
+            (l.len(), l)
+        })
+        .collect()
+}
+
+/// Marks the judged rows (the finest level, or every level) and collects the failures.
+fn judge(cases: &[Case], out: &mut Outcome, counts: Vec<(usize, Ladder)>) {
+    for (case, (count, ladder)) in cases.iter().zip(counts) {
+        for m in &case.metric {
+            for row in out
+                .rows
+                .iter_mut()
+                .filter(|r| r.case == case.case.name && r.metric == m.name)
+            {
+                let vars = case.variables(&ladder[row.level]);
+                let Some(Ok(bound)) = m
+                    .bound
+                    .as_ref()
+                    .and_then(|b| b.get(&row.method, &row.backend, &vars))
+                else {
+                    continue;
+                };
+                if !(m.every_level || row.level + 1 == count) {
+                    continue;
+                }
+                let pass = row.relative_error <= bound;
+                row.bound = Some(bound);
+                row.pass = Some(pass);
+                if !pass {
+                    out.failures.push(format!(
+                        "{} / {} / {} / level {} ({} = {}): {} = {:.6e}, error {:.3e} > bound {:.1e}{}",
+                        row.case,
+                        row.method,
+                        row.backend,
+                        row.level,
+                        case.case.size,
+                        row.size,
+                        row.metric,
+                        row.value,
+                        row.relative_error,
+                        bound,
+                        if row.note.is_empty() {
+                            String::new()
+                        } else {
+                            format!(" ({})", row.note)
+                        }
+                    ));
+                }
+            }
+        }
+    }
+}
+
+/// Runs one level of one case with one method on one backend; one row per applicable metric.
+fn run_one(
+    case: &Case,
+    method: &str,
+    ctx: Option<Arc<GpuContext>>,
+    level_index: usize,
+    level: &std::collections::BTreeMap<String, f64>,
+    scratch: &Path,
+) -> Result<Vec<Row>> {
+    let backend = if ctx.is_some() { "gpu" } else { "cpu" };
+    let text = case
+        .expand(level, method)
+        .map_err(|e| Error::Verify(format!("{}: {e}", case.file.display())))?;
+    let label = PathBuf::from(format!(
+        "{} [{method}, level {level_index}]",
+        case.file.display()
+    ));
+    let scene = Scene::parse(&text, &label)?;
+    let model = Model::build(&scene)?;
+    let plan = Plan::new(&scene, &model);
+    let mut solver: Box<dyn Solver> = match ctx {
+        Some(c) => Box::new(GpuSolver::new(c, &model, &plan, schedule(&scene))?),
+        None => Box::new(CpuSolver::new(
+            model.clone(),
+            plan.clone(),
+            schedule(&scene),
+        )),
+    };
+    let dir = scratch.join(format!(
+        "{}-{method}-{backend}-{level_index}",
+        case.case.name
+    ));
+    let r = run(&scene, &model, &plan, solver.as_mut(), &dir, None)?;
+    let _ = std::fs::remove_dir_all(&dir);
+    let displacement = solver.displacement_now()?;
+    let contacts: Vec<String> = model
+        .contacts
+        .iter()
+        .map(|c| c.name.clone())
+        .chain(model.walls.iter().map(|w| w.name.clone()))
+        .collect();
+    let vars = case.variables(level);
+    let data = metric::RunData {
+        model: &model,
+        samples: &r.samples,
+        displacement: &displacement,
+        contacts: &contacts,
+        vars: &vars,
+    };
+    let failed = (r.summary.status != "completed").then(|| r.summary.message.clone());
+    let mut rows = Vec::new();
+    for m in case.metric.iter().filter(|m| m.applies(method)) {
+        let (value, note) = match &failed {
+            Some(msg) => (f64::NAN, format!("run failed: {msg}")),
+            None => match metric::measure(m, &data) {
+                Ok(v) => (v, String::new()),
+                Err(e) => (f64::NAN, e),
+            },
+        };
+        let err = metric::relative_error(m, value);
+        rows.push(Row {
+            case: case.case.name.clone(),
+            method: method.to_string(),
+            backend: backend.to_string(),
+            level: level_index,
+            size: level.get(&case.case.size).copied().unwrap_or(f64::NAN),
+            elements: model.element_count(),
+            steps: r.summary.steps,
+            wall_seconds: r.summary.wall_seconds,
+            energy_error: r.summary.max_energy_error,
+            metric: m.name.clone(),
+            reference: m.reference,
+            value,
+            relative_error: if err.is_nan() { f64::INFINITY } else { err },
+            bound: None,
+            pass: None,
+            note,
+        });
+    }
+    Ok(rows)
+}
