@@ -446,21 +446,6 @@ pub fn lumped_mass(x: &[[f64; 2]; 4], rho_t: f64) -> [f64; 4] {
     m
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn lumped_mass_sums_to_element_mass() {
-        let x = [[0.0, 0.0], [2.0, 0.1], [2.3, 1.7], [-0.2, 1.1]];
-        let m = lumped_mass(&x, 3.0);
-        let area = quad_geometry(&x).area;
-        let total: f64 = m.iter().sum();
-        assert!((total - 3.0 * area).abs() < 1e-12 * total);
-        assert!(m.iter().all(|&w| w > 0.0));
-    }
-}
-
 /// How far `p` lies inside the convex counter-clockwise quad `x`: the smallest distance to the
 /// lines of its sides (negative or zero outside or on the boundary).
 fn inside_depth(x: &[[f64; 2]; 4], p: [f64; 2]) -> f64 {
@@ -475,4 +460,19 @@ fn inside_depth(x: &[[f64; 2]; 4], p: [f64; 2]) -> f64 {
         }
     }
     depth
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lumped_mass_sums_to_element_mass() {
+        let x = [[0.0, 0.0], [2.0, 0.1], [2.3, 1.7], [-0.2, 1.1]];
+        let m = lumped_mass(&x, 3.0);
+        let area = quad_geometry(&x).area;
+        let total: f64 = m.iter().sum();
+        assert!((total - 3.0 * area).abs() < 1e-12 * total);
+        assert!(m.iter().all(|&w| w > 0.0));
+    }
 }
