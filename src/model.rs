@@ -271,7 +271,7 @@ impl Model {
             };
             let found = set.initial_overlaps(self);
             if found.is_empty() {
-                return Ok(());
+                break;
             }
             // Walls, and one contact pass per round: the reverse pass of a two-pass contact
             // then finds its nodes on the moved surface instead of moving them apart again.
@@ -311,6 +311,55 @@ impl Model {
                 self.corners[e] = x.map(|p| [p[0] - cx, p[1] - cy]);
             }
             self.initial_overlaps.extend(found);
+        }
+        self.refuse_deep_overlaps(scene)
+    }
+
+    /// After the overlap removal: a slave node still inside an element of its master body is
+    /// deeper than half a contact segment (the contact cannot tell from which side it came, and
+    /// would leave it there for the whole run, reporting no penetration): an error naming it.
+    fn refuse_deep_overlaps(&self, scene: &Scene) -> Result<()> {
+        for (ci, c) in self.contacts.iter().enumerate() {
+            let mut dirs = vec![(c.bodies[0], c.bodies[1])];
+            if c.two_pass {
+                dirs.push((c.bodies[1], c.bodies[0]));
+            }
+            for (slave, master) in dirs {
+                let nodes = Surface::of_body(self, slave).nodes;
+                let mb = &self.bodies[master];
+                let corners: Vec<[[f64; 2]; 4]> = mb
+                    .elements
+                    .clone()
+                    .map(|e| self.quads[e].map(|n| self.position[n as usize]))
+                    .collect();
+                let points: Vec<[f64; 2]> =
+                    nodes.iter().map(|&n| self.position[n as usize]).collect();
+                for (k, local) in crate::contact::broad::points_in_boxes(&points, &corners) {
+                    let (n, e) = (nodes[k], mb.elements.start + local);
+                    let x = corners[local];
+                    // Inside by more than round-off: the moved nodes lie on the surface.
+                    let tol = 1e-6 * quad_geometry(&x).area.abs().sqrt();
+                    let depth = inside_depth(&x, self.position[n as usize]);
+                    if depth > tol {
+                        let sb = &self.bodies[slave];
+                        return Err(scene::invalid(
+                            scene,
+                            format!("contact[{ci}]"),
+                            format!("{:?}", c.name),
+                            &format!(
+                                "at t = 0, node {} of body {:?} lies inside element {} of body {:?} \
+                                 (at least {depth:.3e} m from that element's sides), deeper than half \
+                                 a contact segment: such an overlap is not removed and contact \
+                                 would leave the node inside for the whole run; separate the bodies",
+                                n as usize - sb.nodes.start,
+                                sb.name,
+                                e - mb.elements.start,
+                                mb.name
+                            ),
+                        ));
+                    }
+                }
+            }
         }
         Ok(())
     }
@@ -395,6 +444,22 @@ pub fn lumped_mass(x: &[[f64; 2]; 4], rho_t: f64) -> [f64; 4] {
         }
     }
     m
+}
+
+/// How far `p` lies inside the convex counter-clockwise quad `x`: the smallest distance to the
+/// lines of its sides (negative or zero outside or on the boundary).
+fn inside_depth(x: &[[f64; 2]; 4], p: [f64; 2]) -> f64 {
+    let mut depth = f64::INFINITY;
+    for a in 0..4 {
+        let (s, t) = (x[a], x[(a + 1) % 4]);
+        let d = [t[0] - s[0], t[1] - s[1]];
+        let l = d[0].hypot(d[1]);
+        if l > 0.0 {
+            // Left of s -> t is inside.
+            depth = depth.min((d[0] * (p[1] - s[1]) - d[1] * (p[0] - s[0])) / l);
+        }
+    }
+    depth
 }
 
 #[cfg(test)]

@@ -729,7 +729,22 @@ impl Validator<'_> {
     fn run(&self, r: &RawRun) -> Result<RunSettings> {
         let end_time = self.positive("run.end_time", r.end_time)?;
         let time_step_scale = match r.time_step_scale {
-            Some(s) => self.positive("run.time_step_scale", s)?,
+            Some(s) => {
+                let s = self.positive("run.time_step_scale", s)?;
+                // Above 1 the step exceeds the stable step: in a rod (1D, where the estimate is
+                // exact) the shortest mode grows within a few steps; in 2D, where the element
+                // estimate has some reserve, a run may go on for a while and then diverge.
+                if s > 1.0 {
+                    return Err(self.invalid(
+                        "run.time_step_scale",
+                        fmt_num(s),
+                        "must not exceed 1.0: it multiplies the stable step, and above 1 the \
+                         central-difference step is unstable (1.0 is the stability limit itself, \
+                         not a production setting; the default is 0.9)",
+                    ));
+                }
+                s
+            }
             None => DEFAULT_TIME_STEP_SCALE,
         };
         let time_step = r

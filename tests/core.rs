@@ -13,6 +13,9 @@
 //!   mass damping): two-pass Lagrange exact, one pass failing as it should;
 //! - [`contact`]: rod impact (Lagrange, penalty, rigid wall, impedance mismatch), corner-first
 //!   square on a wall, the contact plan and history columns;
+//! - [`stress`]: the stiff and extreme cases of `assets/stress/` (REFERENCES.md section 6): stiff
+//!   penalty, mass and element-size ratios, impacts up to 0.3 c, a thin plate crossed within a
+//!   step, nu = 0.499, initial overlaps, corner impacts, time_step_scale 1.0 and 1.2;
 //! - [`bad_input`]: every rejected scene exits with status 2 and names the file, key and value;
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs;
 //! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound.
@@ -40,5 +43,7 @@ mod patch_contact;
 mod rigid;
 #[path = "core/verify_cases.rs"]
 mod verify_cases;
+#[path = "core/stress.rs"]
+mod stress;
 #[path = "core/wave.rs"]
 mod wave;

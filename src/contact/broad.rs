@@ -57,3 +57,23 @@ pub fn candidates(
     }
     out
 }
+
+/// Pairs (point index, polygon index) where the point lies in the polygon's box (exact bounds, f32
+/// rounding outward), from a BVH over the polygons' boxes; in point order.
+pub fn points_in_boxes(points: &[[f64; 2]], polygons: &[[[f64; 2]; 4]]) -> Vec<(usize, usize)> {
+    if points.is_empty() || polygons.is_empty() {
+        return Vec::new();
+    }
+    let boxes: Vec<Aabb> = polygons.iter().map(|p| aabb(p, 0.0)).collect();
+    let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
+    let mut out = Vec::new();
+    for (k, p) in points.iter().enumerate() {
+        let start = out.len();
+        out.extend(
+            bvh.intersect_aabb(&aabb(&[*p], 0.0))
+                .map(|j| (k, j as usize)),
+        );
+        out[start..].sort_unstable();
+    }
+    out
+}

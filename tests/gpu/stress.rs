@@ -1,0 +1,90 @@
+//! Stress cases of `assets/stress/` (REFERENCES.md section 6) on the GPU, against the same bounds
+//! as the CPU tests (`tests/core/stress.rs`): the penalty 1000 x stiffer than the default (step
+//! reduced to the formula, no energy gained) and the projectile crossing a thin plate within one
+//! step (caught by the swept contact test).
+
+use std::path::Path;
+
+use ricochet::gpu::GpuSolver;
+use ricochet::run::{run, schedule, RunResult};
+
+use crate::{context, load, GPU_LOCK};
+
+fn stress_asset(name: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/stress")
+        .join(name);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn run_gpu(text: &str, name: &str) -> Option<(RunResult, ricochet::model::Model)> {
+    let ctx = context()?;
+    let (scene, model, plan) = load(text, name);
+    let dir =
+        std::env::temp_dir().join(format!("ricochet-gpu-stress-{}-{name}", std::process::id()));
+    let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
+    let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("gpu run");
+    let _ = std::fs::remove_dir_all(&dir);
+    Some((r, model))
+}
+
+#[test]
+fn gpu_stiff_penalty_reduces_the_step_and_gains_no_energy() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text =
+        stress_asset("penalty_stiff.toml").replace("penalty_scale = 1.0", "penalty_scale = 100.0");
+    let Some((r, model)) = run_gpu(&text, "penalty") else {
+        return;
+    };
+    assert_eq!(r.summary.status, "completed", "{}", r.summary.message);
+    let e0 = 0.5 * model.bodies[0].mass * 100.0;
+    let e_max = r
+        .samples
+        .iter()
+        .map(|(s, _)| (s.kinetic + s.internal + s.hourglass) / e0)
+        .fold(0.0f64, f64::max);
+    let last = &r.samples.last().expect("rows").0;
+    let e_end = (last.kinetic + last.internal + last.hourglass) / e0;
+    let dt = 0.9 * 0.05 / (5172.19 * 101f64.sqrt());
+    let dev = (r.summary.dt_max / dt - 1.0)
+        .abs()
+        .max((r.summary.dt_min / dt - 1.0).abs());
+    println!(
+        "gpu penalty 1000 x default: E_end/E0 {e_end:.5}, max E/E0 {e_max:.5}, dt {:.4e} (formula {dt:.4e}), \
+         v1/v0 {:.4}, v2/v0 {:.4}, energy error {:.1e}",
+        r.summary.dt_max,
+        last.body_velocity[0][0] / 10.0,
+        last.body_velocity[1][0] / 10.0,
+        r.summary.max_energy_error
+    );
+    assert!(e_end <= 1.01 && e_max <= 1.01);
+    assert!(dev < 5e-3, "step {dev}");
+    assert!(last.body_velocity[0][0].abs() < 0.5 && last.body_velocity[1][0] > 9.5);
+}
+
+#[test]
+fn gpu_projectile_crossing_a_thin_plate_within_one_step_is_caught() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some((r, _)) = run_gpu(&stress_asset("thin_plate.toml"), "plate") else {
+        return;
+    };
+    assert_eq!(r.summary.status, "completed", "{}", r.summary.message);
+    let thickness = 5.0e-5;
+    let crossing = 600.0 * r.summary.dt_min / thickness;
+    let pen = r
+        .samples
+        .iter()
+        .map(|(s, _)| s.contacts[0].max_penetration)
+        .fold(0.0f64, f64::max);
+    let last = &r.samples.last().expect("rows").0;
+    println!(
+        "gpu thin plate: {crossing:.2} thicknesses per step, reported penetration {pen:.2e} m, \
+         energy error {:.2e}, projectile {:.1} m/s, plate {:.1} m/s",
+        r.summary.max_energy_error, last.body_velocity[0][0], last.body_velocity[1][0]
+    );
+    assert!(crossing > 1.0);
+    assert!(pen < 1e-2 * thickness, "penetration {pen}");
+    assert!(r.summary.max_energy_error < 0.02);
+    assert!(last.body_velocity[0][0] < 0.0, "the projectile rebounds");
+    assert!(last.body_velocity[1][0] > 0.0, "the plate is pushed");
+}
