@@ -13,6 +13,8 @@
 //!   mass damping): two-pass Lagrange exact, one pass failing as it should;
 //! - [`contact`]: rod impact (Lagrange, penalty, rigid wall, impedance mismatch), corner-first
 //!   square on a wall, the contact plan and history columns;
+//! - [`plan`]: a scene pays only for what it uses: the exact stages of the plan, `ricochet check`
+//!   printing it, no contact state without contact, and `ricochet bench` reporting its ratios;
 //! - [`bad_input`]: every rejected scene exits with status 2 and names the file, key and value;
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs.
 
@@ -35,6 +37,8 @@ mod outputs;
 mod patch;
 #[path = "core/patch_contact.rs"]
 mod patch_contact;
+#[path = "core/plan.rs"]
+mod plan;
 #[path = "core/rigid.rs"]
 mod rigid;
 #[path = "core/wave.rs"]

@@ -539,3 +539,5 @@ fn pressure_and_damping_compile_their_kernels_only_when_used() {
 mod contact;
 #[path = "gpu/patch.rs"]
 mod patch;
+#[path = "gpu/plan.rs"]
+mod plan;
