@@ -67,7 +67,8 @@ enum Command {
         #[arg(long)]
         adapter: Option<String>,
     },
-    /// Throughput benchmark on a generated N x N block (no contact).
+    /// Throughput benchmark on a generated N x N block (no contact), with the full step over the
+    /// bare element-and-update loop and the cost of a contact pair, in the same run.
     Bench {
         /// Backend(s).
         #[arg(long, value_enum, default_value = "auto")]
@@ -78,6 +79,9 @@ enum Command {
         /// Steps timed per size.
         #[arg(long, default_value_t = 200)]
         steps: u64,
+        /// Rounds the steps are split into, each variant timed in alternation (medians reported).
+        #[arg(long, default_value_t = ricochet::bench::DEFAULT_ROUNDS)]
+        rounds: u32,
         /// Also write the table as JSON.
         #[arg(long)]
         json: Option<PathBuf>,
@@ -181,6 +185,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             backend,
             cells,
             steps,
+            rounds,
             json,
             adapter,
         } => {
@@ -200,16 +205,20 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 if n == 0 {
                     anyhow::bail!("--cells must be positive");
                 }
+                if rounds == 0 || steps == 0 {
+                    anyhow::bail!("--steps and --rounds must be positive");
+                }
                 if run_cpu {
-                    rows.push(ricochet::bench::cpu(n, steps)?);
+                    rows.push(ricochet::bench::cpu(n, steps, rounds)?);
                     eprint!("{}", ricochet::bench::table(&rows[rows.len() - 1..]));
                 }
                 if let Some(ctx) = &ctx {
-                    rows.push(ricochet::bench::gpu(ctx.clone(), n, steps)?);
+                    rows.push(ricochet::bench::gpu(ctx.clone(), n, steps, rounds)?);
                     eprint!("{}", ricochet::bench::table(&rows[rows.len() - 1..]));
                 }
             }
             println!("{}", ricochet::bench::table(&rows));
+            print!("{}", ricochet::bench::summary(&rows));
             if let Some(path) = json {
                 std::fs::write(&path, serde_json::to_string_pretty(&rows)?)
                     .with_context(|| format!("writing {}", path.display()))?;

@@ -63,9 +63,9 @@ pub struct Plan {
     pub nodes: usize,
     /// Elements.
     pub elements: usize,
-    /// Elements of bodies with viscous hourglass control.
+    /// Elements of bodies with viscous hourglass control (coefficient > 0).
     pub viscous_hourglass_elements: usize,
-    /// Elements of bodies with stiffness hourglass control.
+    /// Elements of bodies with stiffness hourglass control (coefficient > 0).
     pub stiffness_hourglass_elements: usize,
     /// Constrained nodes.
     pub constrained_nodes: usize,
@@ -80,11 +80,12 @@ pub struct Plan {
 impl Plan {
     /// Builds the plan of a scene's model.
     pub fn new(scene: &Scene, model: &Model) -> Plan {
+        // A coefficient of 0 means no hourglass control (README), whatever the form.
         let count = |form| {
             model
                 .bodies
                 .iter()
-                .filter(|b| b.params.hourglass == form)
+                .filter(|b| b.params.hourglass == form && b.params.hourglass_coefficient > 0.0)
                 .map(|b| b.elements.len())
                 .sum::<usize>()
         };

@@ -16,6 +16,8 @@
 //! - [`stress`]: the stiff and extreme cases of `assets/stress/` (REFERENCES.md section 6): stiff
 //!   penalty, mass and element-size ratios, impacts up to 0.3 c, a thin plate crossed within a
 //!   step, nu = 0.499, initial overlaps, corner impacts, time_step_scale 1.0 and 1.2;
+//! - [`plan`]: a scene pays only for what it uses: the exact stages of the plan, `ricochet check`
+//!   printing it, no contact state without contact, and `ricochet bench` reporting its ratios;
 //! - [`bad_input`]: every rejected scene exits with status 2 and names the file, key and value;
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs;
 //! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound.
@@ -39,6 +41,8 @@ mod outputs;
 mod patch;
 #[path = "core/patch_contact.rs"]
 mod patch_contact;
+#[path = "core/plan.rs"]
+mod plan;
 #[path = "core/rigid.rs"]
 mod rigid;
 #[path = "core/verify_cases.rs"]

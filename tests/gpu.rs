@@ -546,3 +546,5 @@ mod patch;
 mod verify;
 #[path = "gpu/stress.rs"]
 mod stress;
+#[path = "gpu/plan.rs"]
+mod plan;

@@ -125,7 +125,7 @@ impl GpuSolver {
                 ctx.adapter_name()
             )));
         }
-        let state = state?;
+        let mut state = state?;
         let history_bytes = 4 * (ROW_CAPACITY * state.params.row_stride) as u64;
         let contact_bytes = state.contact.as_ref().map_or(0, |c| c.history.size());
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
@@ -134,6 +134,7 @@ impl GpuSolver {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        state.allocated.push(("readback", readback.size()));
         let nn = model.node_count() as u64;
         let snap_readback = features.fields.then(|| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -143,6 +144,9 @@ impl GpuSolver {
                 mapped_at_creation: false,
             })
         });
+        if let Some(b) = &snap_readback {
+            state.allocated.push(("snapshot_readback", b.size()));
+        }
         // First estimate of the step, for batch sizes only.
         let cpu = CpuSolver::new(model.clone(), plan.clone(), schedule);
         let dt_estimate = schedule
@@ -406,6 +410,9 @@ impl GpuSolver {
     fn contact_search(&mut self) -> Result<()> {
         let device = &self.ctx.device;
         let nodes_size = self.state.nodes.size();
+        if self.search_readback.is_none() {
+            self.state.allocated.push(("search_readback", nodes_size));
+        }
         let staging = self
             .search_readback
             .get_or_insert_with(|| {
@@ -584,8 +591,11 @@ impl GpuSolver {
         Ok((forces, dt))
     }
 
-    /// Runs `steps` steps of one stage alone (`"element"`, `"node"`, `"control"`) or whole steps
-    /// (`"step"`) and returns the wall seconds, for the bench's per-stage shares.
+    /// Runs `steps` steps of one stage alone (`"element"`, `"node"`, `"control"`), of the bare
+    /// loop (`"bare"`: the element and node stages only, at the last step size) or whole steps
+    /// (`"step"`) in one submission, and returns the wall seconds, for the bench's per-stage
+    /// shares and its full / bare ratio. Whole steps this way do not stop for contact searches:
+    /// time contact scenes with [`GpuSolver::run_steps`].
     ///
     /// # Errors
     /// [`Error::Gpu`] when the device is lost.
@@ -605,6 +615,10 @@ impl GpuSolver {
                     "element" => self.state.record_element(&self.kernels, &mut pass),
                     "node" => self.state.record_node(&self.kernels, &mut pass),
                     "control" => self.state.record_control(&self.kernels, &mut pass),
+                    "bare" => {
+                        self.state.record_element(&self.kernels, &mut pass);
+                        self.state.record_node(&self.kernels, &mut pass);
+                    }
                     _ => self.state.record_step(&self.kernels, &mut pass),
                 }
             }
@@ -615,6 +629,31 @@ impl GpuSolver {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Gpu(format!("device lost while waiting: {e}")))?;
         Ok(t0.elapsed().as_secs_f64())
+    }
+}
+
+impl GpuSolver {
+    /// Takes about `steps` steps (the step a contact search interrupted counts once), in
+    /// submissions of at most [`MAX_BATCH`] steps with the contact searches the kernels ask for,
+    /// discarding outputs (for benchmarks), and returns the steps taken: fewer when the run ended
+    /// or failed.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the device is lost.
+    pub fn run_steps(&mut self, steps: u64) -> Result<u64> {
+        let start = self.ctrl.step as u64;
+        let mut events = Vec::new();
+        while !self.finished {
+            let done = (self.ctrl.step as u64).saturating_sub(start);
+            if done >= steps {
+                break;
+            }
+            let n = (steps - done).min(MAX_BATCH as u64) as u32;
+            self.submit(n);
+            self.read(&mut events)?;
+            events.clear();
+        }
+        Ok((self.ctrl.step as u64).saturating_sub(start))
     }
 }
 

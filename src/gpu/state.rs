@@ -26,7 +26,9 @@ pub const ROW_CAPACITY: u32 = 4096;
 pub struct GpuState {
     /// Sizes and static parameters (as uploaded).
     pub params: Params,
-    /// Names and sizes (bytes) of the buffers allocated, for the plan report.
+    /// Names and sizes (bytes) of the buffers allocated, for the plan report: every device
+    /// buffer of the scene, the host-readable staging buffers of [`super::GpuSolver`] included
+    /// (`readback`, `snapshot_readback`, and `search_readback` from the first contact search on).
     pub allocated: Vec<(&'static str, u64)>,
     pub(crate) ctrl: wgpu::Buffer,
     pub(crate) nodes: wgpu::Buffer,
@@ -382,9 +384,24 @@ impl GpuState {
         let cons_buf =
             (nc > 0).then(|| a.init("constraints", bytemuck::cast_slice(&cons), storage));
         let sample_src = a.zeroed("sample_sources", 16 * (nn + ne + nc + nl) as u64, storage);
-        let dt_partial = a.zeroed("dt_partials", 8 * reduce::groups(ne, rg) as u64, storage);
+        // First-level reduction results; when the control workgroup reduces directly (`fused`)
+        // they are never read or written, and only the minimum size is bound (the kernels
+        // declare them).
+        let dt_partial = a.zeroed(
+            "dt_partials",
+            if fused {
+                0
+            } else {
+                8 * params.dt_groups as u64
+            },
+            storage,
+        );
         let instances_buf = a.init("instances", bytemuck::cast_slice(&instances), storage);
-        let sum_partial = a.zeroed("sum_partials", 16 * first as u64, storage);
+        let sum_partial = a.zeroed(
+            "sum_partials",
+            if fused { 0 } else { 16 * first as u64 },
+            storage,
+        );
         let history = a.zeroed(
             "history",
             4 * (ROW_CAPACITY * row_stride) as u64,

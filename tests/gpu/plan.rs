@@ -1,0 +1,204 @@
+//! A scene pays only for what it uses, on the GPU: for the scenes of the CPU plan tests, the
+//! buffers allocated are exactly those [`expected_buffers`] derives from the plan (the
+//! specification), and each optional kernel exists exactly when the plan has its stage; the bench's
+//! ratios are reported at a tiny size.
+
+use std::collections::BTreeSet;
+
+use ricochet::gpu::GpuSolver;
+use ricochet::plan::Plan;
+use ricochet::plan::Stage::*;
+use ricochet::run::schedule;
+
+use crate::{context, load, GPU_LOCK};
+
+#[path = "../shared/plan_scenes.rs"]
+mod scenes;
+use scenes::cases;
+
+/// The contact kernel's buffers (`src/gpu/contact.rs`).
+const CONTACT: [&str; 11] = [
+    "contact_params",
+    "contact_nodes",
+    "contact_reference",
+    "contact_slots",
+    "contact_segments",
+    "contact_search",
+    "contact_u_search",
+    "contact_scratch",
+    "contact_velocities",
+    "contact_constraints",
+    "contact_history",
+];
+
+/// The buffers a plan needs on the device, by name, right after the solver is built.
+fn expected_buffers(plan: &Plan) -> BTreeSet<&'static str> {
+    // Every scene: parameters and the control block; elements, bodies, nodal state, inverse
+    // masses and the force gather (adjacency, element force slots); each element's stable step
+    // (checked against a fixed step too); v^{n-1/2} and the per-node, per-element sample sources
+    // of the history rows; the reductions (partials and instances; the partials at the minimum
+    // size when the control workgroup reduces directly, see `reduction_scratch_is_minimal...`);
+    // the history ring, its times, the indirect size of the sum dispatch; the readback.
+    let mut b: BTreeSet<&'static str> = [
+        "params",
+        "control",
+        "elements",
+        "bodies",
+        "nodes",
+        "inv_mass",
+        "adjacency_offsets",
+        "adjacency_slots",
+        "element_forces",
+        "element_dt",
+        "v_prev",
+        "sample_sources",
+        "dt_partials",
+        "instances",
+        "sum_partials",
+        "history",
+        "times",
+        "indirect",
+        "readback",
+    ]
+    .into();
+    if plan.has(HourglassViscous) || plan.has(BulkViscosity) {
+        b.insert("element_dissipation");
+    }
+    if plan.has(Fields) {
+        b.extend(["u_snapshot", "snapshot_readback"]);
+    }
+    if plan.has(VelocityBoundaries) {
+        b.insert("constraints");
+    }
+    if plan.has(Pressure) {
+        b.insert("pressure_entries");
+    }
+    if plan.has(Pressure) || plan.has(MassDamping) {
+        b.insert("v_old");
+    }
+    if plan.has(Contact) {
+        b.extend(CONTACT);
+    }
+    b
+}
+
+/// Sizes (bytes) of the plan-dependent buffers that scale with the model.
+fn expected_sizes(plan: &Plan) -> Vec<(&'static str, u64)> {
+    let (nn, ne, nc) = (
+        plan.nodes as u64,
+        plan.elements as u64,
+        plan.constrained_nodes as u64,
+    );
+    let mut s = Vec::new();
+    if plan.has_dissipation() {
+        s.push(("element_dissipation", 32 * ne));
+    }
+    if plan.has(Fields) {
+        s.extend([("u_snapshot", 8 * nn), ("snapshot_readback", 32 * nn)]);
+    }
+    if plan.has(VelocityBoundaries) {
+        s.push(("constraints", (32 * nc).max(16)));
+    }
+    if plan.has(Pressure) || plan.has(MassDamping) {
+        s.push(("v_old", 8 * nn));
+    }
+    s
+}
+
+#[test]
+fn gpu_allocates_exactly_the_buffers_and_kernels_the_plan_uses() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for (name, text, _) in cases() {
+        let (scene, model, plan) = load(&text, name);
+        for fused in [None, Some(false)] {
+            let gpu =
+                GpuSolver::with_reductions(ctx.clone(), &model, &plan, schedule(&scene), fused)
+                    .expect("gpu solver");
+            let state = gpu.state();
+            let list: Vec<&str> = state.allocated.iter().map(|(n, _)| *n).collect();
+            let names: BTreeSet<&str> = list.iter().copied().collect();
+            assert_eq!(names.len(), list.len(), "{name}: a name twice in {list:?}");
+            let expected = expected_buffers(&plan);
+            assert_eq!(
+                names,
+                expected,
+                "{name} ({plan}): allocated but not expected {:?}, expected but not allocated {:?}",
+                names.difference(&expected).collect::<Vec<_>>(),
+                expected.difference(&names).collect::<Vec<_>>()
+            );
+            let size = |n: &str| {
+                state
+                    .allocated
+                    .iter()
+                    .find(|(m, _)| *m == n)
+                    .map(|(_, b)| *b)
+            };
+            for (n, bytes) in expected_sizes(&plan) {
+                assert_eq!(size(n), Some(bytes), "{name}: size of {n}");
+            }
+            if state.params.dt_groups == 0 && state.params.sum_groups == 0 {
+                // The control workgroup reduces directly: the partials are never used.
+                assert_eq!(size("dt_partials"), Some(16), "{name}");
+                assert_eq!(size("sum_partials"), Some(16), "{name}");
+            }
+            let k = gpu.kernels();
+            assert_eq!(k.boundary.is_some(), plan.has(VelocityBoundaries), "{name}");
+            assert_eq!(k.contact.is_some(), plan.has(Contact), "{name}");
+            assert_eq!(state.contact.is_some(), plan.has(Contact), "{name}");
+            assert_eq!(k.pressure.is_some(), plan.has(Pressure), "{name}");
+            let loads = plan.has(Pressure) || plan.has(MassDamping);
+            assert_eq!(k.load_work.is_some(), loads, "{name}");
+            assert_eq!(k.features.loads, loads, "{name}");
+            assert_eq!(k.features.dissipation, plan.has_dissipation(), "{name}");
+            assert_eq!(k.features.fields, plan.has(Fields), "{name}");
+        }
+    }
+}
+
+#[test]
+fn gpu_search_staging_buffer_appears_with_the_first_contact_search_only() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for (name, text, _) in cases() {
+        if !["no_contact", "contact_pair", "wall_only"].contains(&name) {
+            continue;
+        }
+        let (scene, model, plan) = load(&text, name);
+        let mut gpu =
+            GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu solver");
+        assert!(gpu.run_steps(3).expect("steps") >= 3, "{name}");
+        let has = gpu
+            .state()
+            .allocated
+            .iter()
+            .any(|(n, _)| *n == "search_readback");
+        assert_eq!(has, plan.has(Contact), "{name}");
+        assert_eq!(
+            ricochet::step::Solver::counters(&gpu).contact_searches > 0,
+            plan.has(Contact),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn gpu_bench_reports_the_full_over_bare_ratio_and_the_contact_share_at_a_tiny_size() {
+    // Reported, finite and of the right sign: how large they are is for BENCHMARKS.md.
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let r = ricochet::bench::gpu(ctx, 6, 30, 3).expect("bench");
+    eprintln!("{}", ricochet::bench::summary(std::slice::from_ref(&r)));
+    assert_eq!((r.elements, r.steps, r.rounds), (36, 30, 3));
+    assert_eq!(r.contact_elements, 36 + 6);
+    for (key, x) in [
+        ("wall_seconds", r.wall_seconds),
+        ("bare_seconds", r.bare_seconds),
+        ("full_over_bare", r.full_over_bare),
+    ] {
+        assert!(x.is_finite() && x > 0.0, "{key} = {x}");
+    }
+    assert!(r.contact_share.is_finite() && r.contact_share < 1.0);
+    assert!(r.contact_seconds_per_step.is_finite());
+    assert!(r.contact_searches >= 1);
+}
