@@ -45,9 +45,9 @@ mod patch_contact;
 mod plan;
 #[path = "core/rigid.rs"]
 mod rigid;
-#[path = "core/verify_cases.rs"]
-mod verify_cases;
 #[path = "core/stress.rs"]
 mod stress;
+#[path = "core/verify_cases.rs"]
+mod verify_cases;
 #[path = "core/wave.rs"]
 mod wave;

@@ -542,9 +542,9 @@ fn pressure_and_damping_compile_their_kernels_only_when_used() {
 mod contact;
 #[path = "gpu/patch.rs"]
 mod patch;
-#[path = "gpu/verify.rs"]
-mod verify;
-#[path = "gpu/stress.rs"]
-mod stress;
 #[path = "gpu/plan.rs"]
 mod plan;
+#[path = "gpu/stress.rs"]
+mod stress;
+#[path = "gpu/verify.rs"]
+mod verify;

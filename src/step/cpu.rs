@@ -177,7 +177,7 @@ impl CpuSolver {
         best
     }
 
-    #[inline]
+    #[inline(always)] // not inlined otherwise (stack spills in `step`; +18 % throughput measured)
     fn gather(&self, e: usize) -> ([[f64; 2]; 4], [[f64; 2]; 4]) {
         let q = self.model.quads[e];
         (q.map(|i| self.u[i as usize]), q.map(|i| self.v[i as usize]))
