@@ -565,13 +565,23 @@ fn bodies_overlapping_at_t0_are_separated_without_energy_and_deep_overlaps_refus
     assert!(peak < 1e-12, "the blocks moved: {peak:e}");
 
     // 2 mm deep (more than half the lower block's 2.5 mm segments): refused, naming the node.
-    let dir = tmp_dir("stress-deep-overlap");
-    let file = dir.join("deep.toml");
-    std::fs::write(
-        &file,
-        set(&text, "origin = [0.0, 4.96e-3]", "origin = [0.0, 2.96e-3]"),
-    )
-    .expect("write scene");
+    assert_refused(
+        "deep-overlap",
+        &set(&text, "origin = [0.0, 4.96e-3]", "origin = [0.0, 2.96e-3]"),
+        &[
+            "key `contact[0]` = \"upper-lower\"",
+            "node 1 of body \"upper\" lies inside element 5 of body \"lower\"",
+            "separate the bodies",
+        ],
+    );
+}
+
+/// `ricochet check` and `ricochet run` both refuse `text` with exit status 2 and a message holding
+/// every one of `expected`.
+fn assert_refused(name: &str, text: &str, expected: &[&str]) {
+    let dir = tmp_dir(&format!("stress-{name}"));
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, text).expect("write scene");
     let (f, out_dir) = (file.to_str().expect("path"), dir.join("out"));
     for args in [
         vec!["check", f],
@@ -586,14 +596,11 @@ fn bodies_overlapping_at_t0_are_separated_without_energy_and_deep_overlaps_refus
     ] {
         let out = run_bin(&args);
         let err = String::from_utf8_lossy(&out.stderr);
-        println!("deep overlap ({}): {}", args[0], err.trim());
+        println!("{name} ({}): {}", args[0], err.trim());
         assert_eq!(out.status.code(), Some(2), "{err}");
-        assert!(
-            err.contains("key `contact[0]` = \"upper-lower\"")
-                && err.contains("node 1 of body \"upper\" lies inside element 5 of body \"lower\"")
-                && err.contains("separate the bodies"),
-            "{err}"
-        );
+        for e in expected {
+            assert!(err.contains(e), "{e:?} not in: {err}");
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -687,33 +694,9 @@ fn time_step_scale_1_runs_and_above_1_is_refused_naming_the_key() {
     assert!(err < 1e-3);
     assert!(v1.abs() < 0.3 && (v2 - 10.0).abs() < 0.3);
 
-    let dir = tmp_dir("stress-scale");
-    let file = dir.join("scale.toml");
-    std::fs::write(
-        &file,
-        set(&text, "time_step_scale = 1.0 ", "time_step_scale = 1.2 "),
-    )
-    .expect("write scene");
-    let (f, out_dir) = (file.to_str().expect("path"), dir.join("out"));
-    for args in [
-        vec!["check", f],
-        vec![
-            "run",
-            f,
-            "--backend",
-            "cpu",
-            "--out",
-            out_dir.to_str().expect("path"),
-        ],
-    ] {
-        let out = run_bin(&args);
-        let err = String::from_utf8_lossy(&out.stderr);
-        println!("time_step_scale = 1.2 ({}): {}", args[0], err.trim());
-        assert_eq!(out.status.code(), Some(2), "{err}");
-        assert!(
-            err.contains("key `run.time_step_scale` = 1.2: must not exceed 1.0"),
-            "{err}"
-        );
-    }
-    let _ = std::fs::remove_dir_all(&dir);
+    assert_refused(
+        "scale",
+        &set(&text, "time_step_scale = 1.0 ", "time_step_scale = 1.2 "),
+        &["key `run.time_step_scale` = 1.2: must not exceed 1.0"],
+    );
 }

@@ -54,6 +54,20 @@ fn tiny_case(metric: &str) -> String {
         + &rods[end..]
 }
 
+/// `ricochet verify --quick --backend cpu` on the case files of `cases`.
+fn quick_cpu_verify(cases: &Path, out: &Path) -> std::process::Output {
+    run_bin(&[
+        "verify",
+        "--quick",
+        "--backend",
+        "cpu",
+        "--cases",
+        cases.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
 #[test]
 fn a_bad_case_file_is_refused_naming_the_file_and_key() {
     let dir = tmp_dir("verify-bad");
@@ -72,16 +86,7 @@ fn a_bad_case_file_is_refused_naming_the_file_and_key() {
             && msg.contains("unknown variable `m`"),
         "{msg}"
     );
-    let o = run_bin(&[
-        "verify",
-        "--quick",
-        "--backend",
-        "cpu",
-        "--cases",
-        cases.to_str().unwrap(),
-        "--out",
-        dir.join("out").to_str().unwrap(),
-    ]);
+    let o = quick_cpu_verify(&cases, &dir.join("out"));
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("metric[0].bound"), "{stderr}");
@@ -99,16 +104,7 @@ fn a_missed_bound_makes_verify_exit_4_and_name_the_case() {
     );
     std::fs::write(cases.join("rods.toml"), case).unwrap();
     let out = dir.join("out");
-    let o = run_bin(&[
-        "verify",
-        "--quick",
-        "--backend",
-        "cpu",
-        "--cases",
-        cases.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = quick_cpu_verify(&cases, &out);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(4), "{stdout}");
     assert!(
