@@ -183,7 +183,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var hg_q = vec2<f32>(0.0);
     var hg_rate = vec2<f32>(0.0);
     if (b.hourglass == 2u) {
-        let k = b.hourglass_coefficient * (b.lambda_plane + 2.0 * b.mu) * a0t * bb / gg;
+        // Scaled with the shear modulus 2 mu (see ElementParams::hourglass_modulus).
+        let k = b.hourglass_coefficient * 2.0 * b.mu * a0t * bb / gg;
         var q = vec2<f32>(0.0);
         for (var a = 0; a < 4; a++) {
             q += gamma[a] * u[a];
@@ -193,8 +194,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         hg_stored = 0.5 * k * dot(q, q);
     } else if (b.hourglass == 1u) {
-        let c0 = sqrt(b.wave_modulus / b.density);
-        let damp = b.hourglass_coefficient * b.density * c0 * a0t * sqrt(bb) / gg;
+        let rho_c = sqrt(2.0 * b.mu * b.density);
+        let damp = b.hourglass_coefficient * rho_c * a0t * sqrt(bb) / gg;
         for (var a = 0; a < 4; a++) {
             hg_rate += gamma[a] * v[a];
         }

@@ -40,6 +40,12 @@ pub struct ElementParams {
     pub hourglass: HourglassForm,
     /// Hourglass coefficient.
     pub hourglass_coefficient: f64,
+    /// Modulus the hourglass forces scale with: 2 mu. The hourglass mode of a quad is a bending
+    /// (isochoric to first order) mode, so its physical stiffness is set by shear, as in the
+    /// physically stabilized quads of Belytschko and Bachrach (1986). Scaling it with the
+    /// dilatational modulus instead over-stiffens and over-damps it as nu approaches 1/2
+    /// (lambda grows without bound) and the hourglass work swamps the strain energy.
+    pub hourglass_modulus: f64,
     /// Linear bulk-viscosity coefficient (0 = off).
     pub bulk_linear: f64,
     /// Quadratic bulk-viscosity coefficient (0 = off).
@@ -77,6 +83,7 @@ impl ElementParams {
                 .sqrt(),
             hourglass,
             hourglass_coefficient,
+            hourglass_modulus: 2.0 * mu,
             bulk_linear: bulk.0,
             bulk_quadratic: bulk.1,
         }
@@ -295,10 +302,7 @@ pub fn evaluate_with(
     match p.hourglass {
         HourglassForm::None => {}
         HourglassForm::Stiffness => {
-            let k = p.hourglass_coefficient
-                * (p.lambda_plane + 2.0 * p.mu)
-                * a0t
-                * g.hourglass_stiffness;
+            let k = p.hourglass_coefficient * p.hourglass_modulus * a0t * g.hourglass_stiffness;
             let mut q = [0.0; 2];
             for a in 0..4 {
                 q[0] += g.gamma[a] * u[a][0];
@@ -311,8 +315,9 @@ pub fn evaluate_with(
             hourglass_stored = 0.5 * k * (q[0] * q[0] + q[1] * q[1]);
         }
         HourglassForm::Viscous => {
-            let c0 = p.reference_speed;
-            let damp = p.hourglass_coefficient * p.density * c0 * a0t * g.hourglass_viscous;
+            // rho c with c = sqrt(2 mu / rho): sqrt(2 mu rho).
+            let rho_c = (p.hourglass_modulus * p.density).sqrt();
+            let damp = p.hourglass_coefficient * rho_c * a0t * g.hourglass_viscous;
             let mut qd = [0.0; 2];
             for a in 0..4 {
                 qd[0] += g.gamma[a] * v[a][0];

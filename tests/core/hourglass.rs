@@ -105,7 +105,8 @@ fn hourglass_mode_meets_no_force_without_control_and_is_resisted_with_it() {
         .map(|i| f[i][0] * u[i][0] + f[i][1] * u[i][1])
         .sum();
     let p = model.params(0);
-    let k = 0.1 * (p.lambda_plane + 2.0 * p.mu) * T / 2.0; // A (b.b) / (gamma.gamma) = 1/2 for a square
+    // Scaled with 2 mu (not the dilatational modulus); A (b.b) / (gamma.gamma) = 1/2 for a square.
+    let k = 0.1 * 2.0 * p.mu * T / 2.0;
     let stored = model.element_count() as f64 * 0.5 * k * (4.0 * d).powi(2);
     assert!(work < 0.0, "stiffness form must oppose the mode");
     assert!(
@@ -207,7 +208,7 @@ fn stiffness_hourglass_oscillates_at_its_exact_discrete_frequency_and_stores_ene
     let steps = 200;
     let (model, amp, header, rows) = run_mode("stiffness", 0.1, dt, steps);
     let p = model.params(0);
-    let k = 0.1 * (p.lambda_plane + 2.0 * p.mu) * T / 2.0;
+    let k = 0.1 * 2.0 * p.mu * T / 2.0;
     let m_e = p.density * T * H * H / 4.0;
     let omega2 = 4.0 * k / m_e;
     let cos_exact = 1.0 - 0.5 * omega2 * dt * dt;
@@ -251,8 +252,8 @@ fn viscous_hourglass_damps_at_its_exact_rate_and_reports_the_work() {
     let kappa = 0.05;
     let (model, amp, header, rows) = run_mode("viscous", kappa, dt, steps);
     let p = model.params(0);
-    let c0 = (p.wave_modulus / p.density).sqrt();
-    // |b| = sqrt(2) / h for a square, gamma.gamma = 4.
+    let c0 = (2.0 * p.mu / p.density).sqrt(); // the shear-modulus speed sqrt(2 mu / rho)
+                                              // |b| = sqrt(2) / h for a square, gamma.gamma = 4.
     let damp = kappa * p.density * c0 * H * H * T * (2.0f64).sqrt() / H / 4.0;
     let m_e = p.density * T * H * H / 4.0;
     let r_exact = 1.0 - 4.0 * damp * dt / m_e;
