@@ -493,10 +493,10 @@ fn incompressible_run() -> Incompressible {
                 // the element's linear deformation (its displacement gradient times h).
                 let ue = q.map(|n| u[n as usize]);
                 let mut amp = [0.0; 2];
-                for a in 0..4 {
+                for (a, ua) in ue.iter().enumerate() {
                     let s = if a % 2 == 0 { 0.25 } else { -0.25 };
-                    amp[0] += s * ue[a][0];
-                    amp[1] += s * ue[a][1];
+                    amp[0] += s * ua[0];
+                    amp[1] += s * ua[1];
                 }
                 // Displacement differences across the (square) element: its gradient times h.
                 let g = [
