@@ -13,6 +13,8 @@ const KIND_NONE: u32 = 0u;
 const KIND_LAGRANGE: u32 = 1u;
 const KIND_PENALTY: u32 = 2u;
 const XI_TOLERANCE: f32 = 1e-6;
+const TIE_TOLERANCE: f32 = 1e-4;      // crate::contact::narrow::TIE_TOLERANCE
+const ACTIVE_SET_ROUNDS: u32 = 4u;    // crate::contact::ACTIVE_SET_ROUNDS
 
 struct ContactParams {
     n_local: u32,         // contact nodes
@@ -83,10 +85,13 @@ struct Cons {
 
 // 1 / (1 + c): mass damping makes the update's masses (1 + c) m (see Control.damp_c).
 var<private> inv_scale: f32 = 1.0;
+// dt during an active-set re-check (trial positions corrected by dt dv), else 0.
+var<private> corr_dt: f32 = 0.0;
 
 var<workgroup> sh_u: u32;
 var<workgroup> sh_far: atomic<u32>;
 var<workgroup> sh_lagrange: atomic<u32>;
+var<workgroup> sh_new: atomic<u32>;
 var<workgroup> sh_f: array<vec4<f32>, RG>;
 var<workgroup> sh_m: array<f32, RG>;
 
@@ -95,7 +100,7 @@ fn x_n(i: u32, j: u32) -> vec2<f32> {
 }
 
 fn x_tr(i: u32, j: u32) -> vec2<f32> {
-    return (c_ref[i].xy - c_ref[j].xy) + (pos(i).zw - pos(j).zw);
+    return (c_ref[i].xy - c_ref[j].xy) + (pos(i).zw - pos(j).zw) + corr_dt * (dv(i) - dv(j));
 }
 
 fn along(i: u32, n: vec2<f32>) -> f32 {
@@ -166,6 +171,66 @@ fn penalty_impulse(k: f32, g: f32, rate: f32, g_trial: f32, w: f32, dt: f32, dtn
     return min(spring, bound);
 }
 
+// A candidate segment of a slave node (crate::contact::ContactSet::qualify): whether the node is in
+// contact with it, its selection key (larger is better), projection and normal.
+struct Qual {
+    ok: bool,
+    k0: f32,
+    k1: f32,
+    xi: f32,
+    n: vec2<f32>,
+    gap: f32,
+    len: f32,
+}
+
+fn qualify(s: u32, own: vec2<f32>, j: u32, penalty: bool) -> Qual {
+    var r: Qual;
+    r.ok = false;
+    let sg = segs[j];
+    let seg_t = x_n(sg.b, sg.a);
+    if (dot(own, vec2<f32>(seg_t.y, -seg_t.x)) >= 0.0) {
+        return r;
+    }
+    // Projection at the trial positions (Lagrange) or at u_n (penalty).
+    var d = x_tr(s, sg.a);
+    var t = x_tr(sg.b, sg.a);
+    if (penalty) {
+        d = x_n(s, sg.a);
+        t = seg_t;
+    }
+    let l2 = dot(t, t);
+    if (!(l2 > 0.0)) {
+        return r;
+    }
+    let len = sqrt(l2);
+    let xi = dot(d, t) / l2;
+    if (xi < -XI_TOLERANCE || xi > 1.0 + XI_TOLERANCE) {
+        return r;
+    }
+    let n = vec2<f32>(t.y, -t.x) / len;
+    let gap = dot(d, n);
+    if (penalty) {
+        if (!(gap < 0.0 && gap > -0.5 * len)) {
+            return r;
+        }
+        r.k0 = gap;
+        r.k1 = 0.0;
+    } else {
+        let before = line_gap(x_n(s, sg.a), seg_t);
+        if (!(gap < 0.0 && before > -0.5 * len)) {
+            return r;
+        }
+        r.k0 = min(before, 0.0);
+        r.k1 = gap;
+    }
+    r.ok = true;
+    r.xi = clamp(xi, 0.0, 1.0);
+    r.n = n;
+    r.gap = gap;
+    r.len = len;
+    return r;
+}
+
 fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32) -> Cons {
     var c: Cons;
     c.kind = KIND_NONE;
@@ -178,67 +243,59 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32) -> Cons {
     let t_own = x_n(sl.nn, sl.np);
     let own = vec2<f32>(t_own.y, -t_own.x);
     var found = false;
-    var key0 = 0.0;
-    var key1 = 0.0;
+    var best: Qual;
     var best_j = 0u;
-    var best_xi = 0.0;
-    var best_n = vec2<f32>(0.0);
-    var best_gap = 0.0;
     let end = search[k + 1u];
     for (var q = search[k]; q < end; q++) {
         let j = search[cp.cand_base + q];
-        let sg = segs[j];
-        let seg_t = x_n(sg.b, sg.a);
-        if (dot(own, vec2<f32>(seg_t.y, -seg_t.x)) >= 0.0) {
-            continue;
-        }
-        // Projection at the trial positions (Lagrange) or at u_n (penalty).
-        var d = x_tr(s, sg.a);
-        var t = x_tr(sg.b, sg.a);
-        if (penalty) {
-            d = x_n(s, sg.a);
-            t = seg_t;
-        }
-        let l2 = dot(t, t);
-        if (!(l2 > 0.0)) {
-            continue;
-        }
-        let len = sqrt(l2);
-        let xi = dot(d, t) / l2;
-        if (xi < -XI_TOLERANCE || xi > 1.0 + XI_TOLERANCE) {
-            continue;
-        }
-        let n = vec2<f32>(t.y, -t.x) / len;
-        let gap = dot(d, n);
-        var k0 = 0.0;
-        var k1 = 0.0;
-        if (penalty) {
-            if (!(gap < 0.0 && gap > -0.5 * len)) {
-                continue;
-            }
-            k0 = gap;
-        } else {
-            let before = line_gap(x_n(s, sg.a), seg_t);
-            if (!(gap < 0.0 && before > -0.5 * len)) {
-                continue;
-            }
-            k0 = min(before, 0.0);
-            k1 = gap;
-        }
-        if (!found || k0 > key0 || (k0 == key0 && k1 > key1)) {
+        let r = qualify(s, own, j, penalty);
+        if (r.ok && (!found || r.k0 > best.k0 || (r.k0 == best.k0 && r.k1 > best.k1))) {
             found = true;
-            key0 = k0;
-            key1 = k1;
+            best = r;
             best_j = j;
-            best_xi = clamp(xi, 0.0, 1.0);
-            best_n = n;
-            best_gap = gap;
         }
     }
     if (!found) {
         return c;
     }
     let sg = segs[best_j];
+    var best_xi = best.xi;
+    var best_n = best.n;
+    var best_gap = best.gap;
+    // A tie with the neighbouring segment at a shared master node: contact with that node along
+    // its averaged normal (crate::contact::narrow::vertex).
+    for (var q = search[k]; q < end; q++) {
+        let j2 = search[cp.cand_base + q];
+        let s2 = segs[j2];
+        var m = NONE;
+        if (s2.a == sg.b && s2.b != sg.a) {
+            m = sg.b;
+        } else if (s2.b == sg.a && s2.a != sg.b) {
+            m = sg.a;
+        } else {
+            continue;
+        }
+        let r = qualify(s, own, j2, penalty);
+        if (!r.ok) {
+            continue;
+        }
+        let tol = TIE_TOLERANCE * best.len;
+        if (abs(r.k0 - best.k0) > tol || abs(r.k1 - best.k1) > tol) {
+            continue;
+        }
+        let nsum = best.n + r.n;
+        let l = length(nsum);
+        if (l > 1e-6) {
+            best_n = nsum / l;
+            var d = x_tr(s, m);
+            if (penalty) {
+                d = x_n(s, m);
+            }
+            best_gap = dot(d, best_n);
+            best_xi = select(0.0, 1.0, m == sg.b);
+        }
+        break;
+    }
     let w = dt * (along(s, best_n) + (1.0 - best_xi) * (1.0 - best_xi) * along(sg.a, best_n)
         + best_xi * best_xi * along(sg.b, best_n));
     if (!(w > 0.0)) {
@@ -274,7 +331,7 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32) -> Cons {
     let s = sl.s;
     let n = sl.normal;
     let x = (c_ref[s].xy - sl.point) + pos(s).xy;
-    let xt = (c_ref[s].xy - sl.point) + pos(s).zw;
+    let xt = (c_ref[s].xy - sl.point) + pos(s).zw + corr_dt * dv(s);
     let g = dot(x, n);
     let g_tr = dot(xt, n);
     let w = dt * along(s, n);
@@ -295,6 +352,51 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32) -> Cons {
         c.kind = KIND_PENALTY;
     }
     return c;
+}
+
+// Projected Gauss-Seidel sweeps over the Lagrange constraints, colour by colour, until the largest
+// change of a gap is below 1e-7 x margin or max_sweeps (crate::contact::ContactSet::sweep).
+fn sweeps(l: u32, dt: f32) {
+    let cb = cp.color_base;
+    let sb = cp.slot_base;
+    let tol = 1e-7 * cp.margin;
+    for (var sweep = 0u; sweep < cp.max_sweeps; sweep++) {
+        var change = 0.0;
+        for (var col = 0u; col < cp.n_colors; col++) {
+            let end = search[cb + col + 1u];
+            for (var q = search[cb + col] + l; q < end; q += RG) {
+                let k = search[sb + q];
+                let c = cons[k];
+                if (c.kind != KIND_LAGRANGE) {
+                    continue;
+                }
+                let s = slots[k].s;
+                let g = c.g0 + dt * relative(c, s);
+                let lambda = max(c.lambda - g / c.w, 0.0);
+                let d = lambda - c.lambda;
+                if (d != 0.0) {
+                    apply(c, s, d);
+                    cons[k].lambda = lambda;
+                    change = max(change, abs(d * c.w));
+                }
+            }
+            storageBarrier();
+        }
+        sh_m[l] = change;
+        workgroupBarrier();
+        for (var h = RG / 2u; h > 0u; h >>= 1u) {
+            if (l < h) {
+                sh_m[l] = max(sh_m[l], sh_m[l + h]);
+            }
+            workgroupBarrier();
+        }
+        if (l == 0u) {
+            sh_u = select(0u, 1u, sh_m[0] <= tol);
+        }
+        if (workgroupUniformLoad(&sh_u) != 0u) {
+            break;
+        }
+    }
 }
 
 @compute @workgroup_size(RG)
@@ -391,43 +493,40 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>) {
     }
     let lagrange = workgroupUniformLoad(&sh_lagrange);
     if (lagrange > 0u) {
-        let tol = 1e-7 * cp.margin;
-        for (var sweep = 0u; sweep < cp.max_sweeps; sweep++) {
-            var change = 0.0;
-            for (var col = 0u; col < cp.n_colors; col++) {
-                let end = search[cb + col + 1u];
-                for (var q = search[cb + col] + l; q < end; q += RG) {
-                    let k = search[sb + q];
-                    let c = cons[k];
-                    if (c.kind != KIND_LAGRANGE) {
-                        continue;
-                    }
-                    let s = slots[k].s;
-                    let g = c.g0 + dt * relative(c, s);
-                    let lambda = max(c.lambda - g / c.w, 0.0);
-                    let d = lambda - c.lambda;
-                    if (d != 0.0) {
-                        apply(c, s, d);
-                        cons[k].lambda = lambda;
-                        change = max(change, abs(d * c.w));
-                    }
-                }
-                storageBarrier();
-            }
-            sh_m[l] = change;
-            workgroupBarrier();
-            for (var h = RG / 2u; h > 0u; h >>= 1u) {
-                if (l < h) {
-                    sh_m[l] = max(sh_m[l], sh_m[l + h]);
-                }
-                workgroupBarrier();
-            }
+        sweeps(l, dt);
+        // Active-set update (crate::contact::ContactSet::recheck): the free Lagrange slots again,
+        // at the trial positions corrected by dt dv; sweep again when any penetrates.
+        for (var round = 0u; round < ACTIVE_SET_ROUNDS; round++) {
             if (l == 0u) {
-                sh_u = select(0u, 1u, sh_m[0] <= tol);
+                atomicStore(&sh_new, 0u);
             }
-            if (workgroupUniformLoad(&sh_u) != 0u) {
+            workgroupBarrier();
+            corr_dt = dt;
+            for (var k = l; k < cp.n_slots; k += RG) {
+                let sl = slots[k];
+                if (cons[k].kind != KIND_NONE || (sl.info & 0x10000u) != 0u) {
+                    continue;
+                }
+                var c: Cons;
+                if ((sl.info & 0x20000u) != 0u) {
+                    c = narrow_wall(sl, dt, dtn);
+                } else {
+                    c = narrow_pass(k, sl, dt, dtn);
+                }
+                if (c.kind == KIND_LAGRANGE) {
+                    // The gap at the free trial positions, as for every constraint.
+                    c.g0 -= dt * relative(c, sl.s);
+                    c.dt_warm = dtn;
+                    cons[k] = c;
+                    atomicAdd(&sh_new, 1u);
+                }
+            }
+            corr_dt = 0.0;
+            storageBarrier();
+            if (workgroupUniformLoad(&sh_new) == 0u) {
                 break;
             }
+            sweeps(l, dt);
         }
     }
 

@@ -30,6 +30,9 @@ use surface::{Segment, Surface};
 pub const MAX_SWEEPS: usize = 500;
 /// Sweeps stop when no gap changes by more than this fraction of the search margin.
 pub const SWEEP_TOLERANCE: f64 = 1e-13;
+/// Rounds of the Lagrange active-set update per step (re-checks of the free nodes at the
+/// corrected positions, each followed by sweeps when it adds constraints).
+pub const ACTIVE_SET_ROUNDS: usize = 4;
 
 /// What a contact or wall reports at a history sample.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -165,6 +168,12 @@ pub struct ContactSet {
     // Scratch.
     x_n: Vec<[f64; 2]>,
     x_tr: Vec<[f64; 2]>,
+    /// Corrected positions x_tr + dt dv of an active-set re-check (scratch).
+    x_c: Vec<[f64; 2]>,
+    /// Constrained (interface, node) keys of a re-check (scratch).
+    done: Vec<[u32; 2]>,
+    /// The step's dt (set by `apply`).
+    dt: f64,
     v_free: Vec<[f64; 2]>,
     dv: Vec<[f64; 2]>,
     cons: Vec<Constraint>,
@@ -314,6 +323,9 @@ impl ContactSet {
             x_ref: vec![[0.0; 2]; nodes.len()],
             x_n: vec![[0.0; 2]; nodes.len()],
             x_tr: vec![[0.0; 2]; nodes.len()],
+            x_c: vec![[0.0; 2]; nodes.len()],
+            done: Vec::new(),
+            dt: 0.0,
             v_free: vec![[0.0; 2]; nodes.len()],
             dv: vec![[0.0; 2]; nodes.len()],
             nodes,
@@ -542,8 +554,9 @@ impl ContactSet {
         for d in &mut self.dv {
             *d = [0.0; 2];
         }
-        self.collect_passes(dt, dt_n);
-        self.collect_walls(dt, dt_n);
+        self.dt = dt;
+        self.collect_passes(dt, dt_n, None);
+        self.collect_walls(dt, dt_n, None);
         // Penalty impulses (marked by w < 0, impulse in lambda): fixed, applied first.
         let n_pen = self.cons.iter().filter(|c| c.w < 0.0).count();
         for k in 0..self.cons.len() {
@@ -574,27 +587,20 @@ impl ContactSet {
                 }
             }
         }
-        let tol = SWEEP_TOLERANCE * self.margin.max(f64::MIN_POSITIVE);
         if self.cons.len() > n_pen {
-            for _ in 0..MAX_SWEEPS {
-                let mut change: f64 = 0.0;
-                for k in 0..self.cons.len() {
-                    let c = self.cons[k];
-                    if c.w < 0.0 {
-                        continue;
-                    }
-                    let g = c.g0 + dt * self.relative(&c);
-                    let lambda = (c.lambda - g / c.w).max(0.0);
-                    let d = lambda - c.lambda;
-                    if d != 0.0 {
-                        self.impulse(&c, d);
-                        self.cons[k].lambda = lambda;
-                        change = change.max((d * c.w).abs());
-                    }
-                }
-                if change <= tol {
+            self.sweep();
+            // Active-set update: the sweeps move master nodes, which can carry a segment onto
+            // a slave node that was free at the trial positions (a node beside a dent, or at
+            // a kink, whose neighbours are pushed back). Such a node would end the step inside
+            // the other body, unconstrained. Check the free nodes again at the corrected
+            // positions and sweep again with any that penetrate, a few rounds at most.
+            for _ in 0..ACTIVE_SET_ROUNDS {
+                let before = self.cons.len();
+                self.recheck(dt, dt_n);
+                if self.cons.len() == before {
                     break;
                 }
+                self.sweep();
             }
         }
         self.warm.clear();
@@ -656,6 +662,57 @@ impl ContactSet {
         work
     }
 
+    /// Projected Gauss-Seidel sweeps over the Lagrange constraints, in their fixed order, until
+    /// the largest change of a gap is below [`SWEEP_TOLERANCE`] x margin or [`MAX_SWEEPS`].
+    fn sweep(&mut self) {
+        let tol = SWEEP_TOLERANCE * self.margin.max(f64::MIN_POSITIVE);
+        let dt = self.dt;
+        for _ in 0..MAX_SWEEPS {
+            let mut change: f64 = 0.0;
+            for k in 0..self.cons.len() {
+                let c = self.cons[k];
+                if c.w < 0.0 {
+                    continue;
+                }
+                let g = c.g0 + dt * self.relative(&c);
+                let lambda = (c.lambda - g / c.w).max(0.0);
+                let d = lambda - c.lambda;
+                if d != 0.0 {
+                    self.impulse(&c, d);
+                    self.cons[k].lambda = lambda;
+                    change = change.max((d * c.w).abs());
+                }
+            }
+            if change <= tol {
+                break;
+            }
+        }
+    }
+
+    /// Adds the Lagrange constraints of the slave and wall nodes without one that penetrate at
+    /// the corrected positions x_tr + dt dv (see `apply`). Their gaps are stored at the free
+    /// trial positions, as for every constraint, so that the sweeps treat them alike.
+    fn recheck(&mut self, dt: f64, dt_n: f64) {
+        let mut done = std::mem::take(&mut self.done);
+        done.clear();
+        done.extend(self.cons.iter().map(warm_key));
+        done.sort_unstable();
+        for l in 0..self.x_tr.len() {
+            let (x, d) = (self.x_tr[l], self.dv[l]);
+            self.x_c[l] = [x[0] + dt * d[0], x[1] + dt * d[1]];
+        }
+        std::mem::swap(&mut self.x_tr, &mut self.x_c);
+        let first = self.cons.len();
+        self.collect_passes(dt, dt_n, Some(&done));
+        self.collect_walls(dt, dt_n, Some(&done));
+        std::mem::swap(&mut self.x_tr, &mut self.x_c);
+        for k in first..self.cons.len() {
+            let c = self.cons[k];
+            self.cons[k].g0 = c.g0 - dt * self.relative(&c);
+        }
+        self.done = done;
+    }
+
     /// Relative normal velocity change of constraint `c` from the impulses so far.
     #[inline]
     fn relative(&self, c: &Constraint) -> f64 {
@@ -711,9 +768,50 @@ impl ContactSet {
         r
     }
 
-    fn collect_passes(&mut self, dt: f64, dt_n: f64) {
+    /// Whether slave `s` (own outward normal `own`) is in contact with segment `j` of pass `p`,
+    /// and if so its selection key (larger is better) and projection.
+    ///
+    /// Lagrange: projection at the trial positions; the node penetrates and came from the
+    /// segment's front (see [`penetrates`]); key (gap before the step clamped at 0, trial gap):
+    /// the segment the node came from the front of, then the closest. Penalty: projection at
+    /// u_n, penetrating by less than half the segment; key (gap, 0).
+    fn qualify(
+        &self,
+        p: &Pass,
+        s: u32,
+        own: [f64; 2],
+        j: usize,
+    ) -> Option<((f64, f64), narrow::Projection)> {
+        let [a, b] = p.segments[j];
+        let (sl, al, bl) = (s as usize, a as usize, b as usize);
+        // Only segments that face the node's own surface: at a corner shared by two segments
+        // this keeps the face the node meets, not the edge it touches end-on.
+        let seg_t = sub(self.x_n[bl], self.x_n[al]);
+        if dot(own, [seg_t[1], -seg_t[0]]) >= 0.0 {
+            return None;
+        }
+        match p.method {
+            ContactMethod::Lagrange => {
+                let pr = project(self.x_tr[sl], self.x_tr[al], self.x_tr[bl])?;
+                // Gap before the step, to the segment's line at u_n.
+                let before = line_gap(self.x_n[sl], self.x_n[al], self.x_n[bl]);
+                penetrates(pr.gap, before, pr.length).then_some(((before.min(0.0), pr.gap), pr))
+            }
+            ContactMethod::Penalty => {
+                let pr = project(self.x_n[sl], self.x_n[al], self.x_n[bl])?;
+                (pr.gap < 0.0 && pr.gap > -0.5 * pr.length).then_some(((pr.gap, 0.0), pr))
+            }
+        }
+    }
+
+    /// The constraints of the passes' slave nodes; with `skip` (a re-check, see `recheck`),
+    /// Lagrange passes only, and not the nodes that have one (sorted `warm_key`s).
+    fn collect_passes(&mut self, dt: f64, dt_n: f64, skip: Option<&[[u32; 2]]>) {
         for pi in 0..self.passes.len() {
             let p = &self.passes[pi];
+            if skip.is_some() && p.method != ContactMethod::Lagrange {
+                continue;
+            }
             let sign = if p.slave_is_first { 1.0 } else { -1.0 };
             let mut k = 0;
             while k < p.candidates.len() {
@@ -723,51 +821,62 @@ impl ContactSet {
                 let [np, nn] = p.neighbours[si as usize];
                 let t = sub(self.x_n[nn as usize], self.x_n[np as usize]);
                 let own = [t[1], -t[0]];
+                let first = k;
+                while k < p.candidates.len() && p.candidates[k].0 == si {
+                    k += 1;
+                }
+                let range = &p.candidates[first..k];
+                if skip.is_some_and(|d| d.binary_search(&[p.interface as u32, s]).is_ok()) {
+                    continue;
+                }
                 // (key, segment, projection) of the best candidate.
                 let mut best: Option<((f64, f64), usize, narrow::Projection)> = None;
-                while k < p.candidates.len() && p.candidates[k].0 == si {
-                    let j = p.candidates[k].1 as usize;
-                    k += 1;
-                    let [a, b] = p.segments[j];
-                    let (sl, al, bl) = (s as usize, a as usize, b as usize);
-                    // Only segments that face the node's own surface: at a corner shared by
-                    // two segments this keeps the face the node meets, not the edge it touches
-                    // end-on.
-                    let seg_t = sub(self.x_n[bl], self.x_n[al]);
-                    if dot(own, [seg_t[1], -seg_t[0]]) >= 0.0 {
-                        continue;
-                    }
-                    match p.method {
-                        ContactMethod::Lagrange => {
-                            let Some(pr) = project(self.x_tr[sl], self.x_tr[al], self.x_tr[bl])
-                            else {
-                                continue;
-                            };
-                            // Gap before the step, to the segment's line at u_n.
-                            let before = line_gap(self.x_n[sl], self.x_n[al], self.x_n[bl]);
-                            if penetrates(pr.gap, before, pr.length) {
-                                // The segment the node came from the front of, then the closest.
-                                let key = (before.min(0.0), pr.gap);
-                                if best.is_none_or(|(bk, _, _)| key > bk) {
-                                    best = Some((key, j, pr));
-                                }
-                            }
-                        }
-                        ContactMethod::Penalty => {
-                            let Some(pr) = project(self.x_n[sl], self.x_n[al], self.x_n[bl]) else {
-                                continue;
-                            };
-                            if pr.gap < 0.0 && pr.gap > -0.5 * pr.length {
-                                let key = (pr.gap, 0.0);
-                                if best.is_none_or(|(bk, _, _)| key > bk) {
-                                    best = Some((key, j, pr));
-                                }
-                            }
+                for &(_, j) in range {
+                    let j = j as usize;
+                    if let Some((key, pr)) = self.qualify(p, s, own, j) {
+                        if best.is_none_or(|(bk, _, _)| key > bk) {
+                            best = Some((key, j, pr));
                         }
                     }
                 }
-                let Some((_, j, pr)) = best else { continue };
+                let Some((key, j, mut pr)) = best else {
+                    continue;
+                };
                 let [a, b] = p.segments[j];
+                // A tie with the neighbouring segment at a shared master node: the node meets
+                // that master node (a corner met end-on, e.g. corner to corner), not either
+                // face. Contact with the node itself along its averaged normal, so that the
+                // choice does not fall to round-off (which breaks symmetry).
+                for &(_, j2) in range {
+                    let j2 = j2 as usize;
+                    let [a2, b2] = p.segments[j2];
+                    let m = if a2 == b && b2 != a {
+                        b
+                    } else if b2 == a && a2 != b {
+                        a
+                    } else {
+                        continue;
+                    };
+                    let Some((key2, pr2)) = self.qualify(p, s, own, j2) else {
+                        continue;
+                    };
+                    if !narrow::ties(key, key2, pr.length) {
+                        continue;
+                    }
+                    let x = if p.method == ContactMethod::Lagrange {
+                        &self.x_tr
+                    } else {
+                        &self.x_n
+                    };
+                    if let Some(v) =
+                        narrow::vertex(x[s as usize], x[m as usize], pr.normal, pr2.normal)
+                    {
+                        pr.normal = v.normal;
+                        pr.gap = v.gap;
+                        pr.xi = if m == b { 1.0 } else { 0.0 };
+                    }
+                    break;
+                }
                 let w = self.weight(s, Some((a, b)), pr.xi, pr.normal, dt);
                 if w.is_nan() || w <= 0.0 {
                     continue;
@@ -797,10 +906,17 @@ impl ContactSet {
         }
     }
 
-    fn collect_walls(&mut self, dt: f64, dt_n: f64) {
+    /// The constraints of the walls' nodes; `skip` as for [`Self::collect_passes`].
+    fn collect_walls(&mut self, dt: f64, dt_n: f64, skip: Option<&[[u32; 2]]>) {
         for wi in 0..self.walls.len() {
             let w = &self.walls[wi];
+            if skip.is_some() && w.method != ContactMethod::Lagrange {
+                continue;
+            }
             for (idx, &l) in w.nodes.iter().enumerate() {
+                if skip.is_some_and(|d| d.binary_search(&[w.interface as u32, l]).is_ok()) {
+                    continue;
+                }
                 let n = w.normal;
                 let (g, g_tr) = (
                     dot(sub(self.x_n[l as usize], w.point), n),

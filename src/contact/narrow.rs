@@ -50,3 +50,61 @@ pub fn project(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> Option<Projection> {
 pub fn penetrates(gap: f64, gap_before: f64, length: f64) -> bool {
     gap < 0.0 && gap_before > -0.5 * length
 }
+
+/// Tolerance, relative to the segment length, within which two candidate segments' selection
+/// keys tie (the node sits on the bisector of a master corner, up to round-off, f32 included).
+pub const TIE_TOLERANCE: f64 = 1e-4;
+
+/// Whether two selection keys (see the contact passes) tie within [`TIE_TOLERANCE`] of `length`.
+#[inline]
+pub fn ties(k1: (f64, f64), k2: (f64, f64), length: f64) -> bool {
+    let tol = TIE_TOLERANCE * length;
+    (k1.0 - k2.0).abs() <= tol && (k1.1 - k2.1).abs() <= tol
+}
+
+/// Contact of a node with a master node (a corner shared by two segments).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Vertex {
+    /// The corner's averaged outward unit normal.
+    pub normal: [f64; 2],
+    /// Signed gap of the node along it (negative: penetration).
+    pub gap: f64,
+}
+
+/// Contact of node `p` with master node `m` whose two segments have unit normals `n1`, `n2`:
+/// the normal is their normalised sum; `None` when they are opposite (a degenerate sliver).
+#[inline]
+pub fn vertex(p: [f64; 2], m: [f64; 2], n1: [f64; 2], n2: [f64; 2]) -> Option<Vertex> {
+    let n = [n1[0] + n2[0], n1[1] + n2[1]];
+    let l = n[0].hypot(n[1]);
+    if l.is_nan() || l <= 1e-6 {
+        return None;
+    }
+    let normal = [n[0] / l, n[1] / l];
+    Some(Vertex {
+        normal,
+        gap: (p[0] - m[0]) * normal[0] + (p[1] - m[1]) * normal[1],
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_node_below_a_right_angled_corner_meets_it_along_the_bisector() {
+        let s = 0.5f64.sqrt();
+        let v = vertex([0.0, -0.2], [0.0, 0.0], [-s, s], [s, s]).expect("a corner");
+        assert!((v.normal[0]).abs() < 1e-15 && (v.normal[1] - 1.0).abs() < 1e-15);
+        assert!((v.gap + 0.2).abs() < 1e-15);
+        // Opposite normals (a zero-thickness sliver) have no corner normal.
+        assert!(vertex([0.0, 0.0], [0.0, 0.0], [0.0, 1.0], [0.0, -1.0]).is_none());
+    }
+
+    #[test]
+    fn keys_tie_within_the_tolerance_of_the_segment_length() {
+        assert!(ties((0.0, -1e-3), (0.0, -1e-3 + 0.9e-4), 1.0));
+        assert!(!ties((0.0, -1e-3), (0.0, -1e-3 + 1.1e-4), 1.0));
+        assert!(!ties((-2e-4, -1e-3), (0.0, -1e-3), 1.0));
+    }
+}
