@@ -105,6 +105,24 @@ pub enum MetricKind {
     EnergyBalance,
     /// Largest |sigma - sigma_ref| over all elements at the end (sigma_ref = `stress`), in Pa.
     StressError,
+    /// Kinetic over internal (strain) energy at the end: how static a dynamic-relaxation run
+    /// ended.
+    KineticRatio,
+    /// |force| of `contact` along `component` in the last history interval (N or N/m): the
+    /// resultant a (near-)static run transmits.
+    FinalForce,
+    /// Largest nodal contact pressure between `body` and the rigid wall `contact` at the end (Pa),
+    /// from the static nodal balance (see [`super::metric::contact_pressures`]).
+    PeakPressure,
+    /// Half the length of the loaded part of the surface of `body` on the rigid wall `contact` at
+    /// the end (m): half the sum of the tributary lengths (along the wall) of the nodes that touch
+    /// it with a positive pressure (see [`super::metric::contact_pressures`]). A node carries its
+    /// whole tributary length, so the estimate is within about half an element of the edge.
+    ContactHalfWidth,
+    /// The error of that half-width against `half_width`, in elements: (a - a_ref) / h, with h
+    /// the mean length along the wall of the two surface segments that straddle the edges of the
+    /// loaded zone (from the outermost loaded node to the next surface node).
+    EdgeError,
 }
 
 /// A bound value: a number, or an expression over the run's variables (e.g. `"0.9 / n"`).
@@ -206,7 +224,7 @@ pub struct Metric {
     /// The contact or wall (by name) for force and duration metrics.
     #[serde(default)]
     pub contact: Option<String>,
-    /// The body for velocity metrics.
+    /// The body for velocity and contact-pressure metrics.
     #[serde(default)]
     pub body: Option<String>,
     /// "x" or "y" (default "x").
@@ -218,6 +236,9 @@ pub struct Metric {
     /// Reference stress [xx, yy, xy] (Pa) for `stress_error`.
     #[serde(default)]
     pub stress: Option<[f64; 3]>,
+    /// Reference contact half-width (m) for `edge_error`.
+    #[serde(default)]
+    pub half_width: Option<f64>,
 }
 
 impl Metric {
@@ -302,12 +323,19 @@ impl Case {
             };
             use MetricKind as K;
             match m.kind {
-                K::ContactDuration | K::PlateauForce | K::PeakForce => {
+                K::ContactDuration | K::PlateauForce | K::PeakForce | K::FinalForce => {
                     need("contact", m.contact.is_some())?
                 }
                 K::BodyVelocity | K::Restitution => need("body", m.body.is_some())?,
+                K::PeakPressure | K::ContactHalfWidth | K::EdgeError => {
+                    need("body", m.body.is_some())?;
+                    need("contact", m.contact.is_some())?;
+                    if m.kind == K::EdgeError {
+                        need("half_width", m.half_width.is_some())?
+                    }
+                }
                 K::StressError => need("stress", m.stress.is_some())?,
-                K::ContactEnergyRatio | K::EnergyDrift | K::EnergyBalance => {}
+                K::ContactEnergyRatio | K::EnergyDrift | K::EnergyBalance | K::KineticRatio => {}
             }
             if let Some(c) = &m.component {
                 if c != "x" && c != "y" {

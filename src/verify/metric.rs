@@ -4,9 +4,126 @@
 use std::collections::BTreeMap;
 
 use super::case::{eval, Metric, MetricKind};
+use crate::contact::surface::Surface;
 use crate::model::Model;
 use crate::output::fields::element_fields;
+use crate::scene::RigidWall;
+use crate::step::element::{evaluate, Dissipation};
 use crate::step::Sample;
+
+/// A surface node touches a rigid wall when its distance to the wall is below this fraction of
+/// its tributary length (Lagrange contact closes the gap to round-off; just outside a Hertz
+/// contact zone, half an element from its edge, the gap is still about 1e-2 of the element).
+pub const TOUCH_FRACTION: f64 = 1e-3;
+
+/// The contact pressure at one surface node touching a rigid wall, from the static nodal balance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodalPressure {
+    /// Global node index.
+    pub node: u32,
+    /// Current position.
+    pub position: [f64; 2],
+    /// Contact pressure (Pa, compressive positive).
+    pub pressure: f64,
+    /// Tributary length along the wall: half the sum of the lengths of the node's two surface
+    /// segments (reference configuration) projected on the wall.
+    pub length: f64,
+    /// Reference coordinate along the wall (the tangent is the normal turned clockwise).
+    pub along: f64,
+    /// Smallest and largest coordinate along the wall of the node's two surface neighbours.
+    pub neighbours: [f64; 2],
+}
+
+/// The contact pressure at every surface node of `body` that touches `wall`, for the
+/// displacement `u` at time `t`.
+///
+/// In static equilibrium the contact force on a node balances the element forces and the
+/// external (pressure) loads on it: `f_c = -(f_elements + f_ext)`, with the element forces
+/// evaluated in f64 from `u` alone (stress and stiffness hourglass; no velocity, so no viscous
+/// part). The pressure is the component of `f_c` along the wall normal over the tributary area
+/// (the tributary length along the wall times the thickness), lengths taken in the reference
+/// configuration: the nominal traction, the one the small-strain theory (Hertz) and the
+/// geometrically linear material balance. A node touches the wall when its current distance to
+/// it is below [`TOUCH_FRACTION`] of its tributary length. The result depends only on
+/// `u`, so CPU and GPU runs are measured alike; it is exact for a converged dynamic relaxation
+/// (no inertia or damping force left).
+pub fn contact_pressures(
+    model: &crate::model::Model,
+    u: &[[f64; 2]],
+    body: usize,
+    wall: &RigidWall,
+    t: f64,
+) -> Vec<NodalPressure> {
+    let b = &model.bodies[body];
+    let mut force = vec![[0.0f64; 2]; model.node_count()];
+    for e in b.elements.clone() {
+        let q = model.quads[e];
+        let ue = q.map(|i| u[i as usize]);
+        let out = evaluate(
+            model.params(e),
+            &model.corners[e],
+            &ue,
+            &[[0.0; 2]; 4],
+            &Dissipation::default(),
+            0.0,
+        );
+        for (a, &n) in q.iter().enumerate() {
+            force[n as usize][0] += out.force[a][0];
+            force[n as usize][1] += out.force[a][1];
+        }
+    }
+    for load in &model.pressures {
+        let p = load.at(t);
+        for (n, f) in &load.nodes {
+            force[*n as usize][0] += p * f[0];
+            force[*n as usize][1] += p * f[1];
+        }
+    }
+    let x = |n: u32| {
+        let (p, d) = (model.position[n as usize], u[n as usize]);
+        [p[0] + d[0], p[1] + d[1]]
+    };
+    let nw = wall.normal;
+    let surface = Surface::of_body(model, body);
+    let along = |p: [f64; 2]| p[0] * nw[1] - p[1] * nw[0];
+    let mut length = vec![0.0f64; model.node_count()];
+    let mut neighbours = vec![[f64::INFINITY, f64::NEG_INFINITY]; model.node_count()];
+    let reference = |n: u32| model.position[n as usize];
+    for s in &surface.segments {
+        let [a, c] = s.nodes;
+        let (sa, sc) = (along(reference(a)), along(reference(c)));
+        length[a as usize] += 0.5 * (sc - sa).abs();
+        length[c as usize] += 0.5 * (sc - sa).abs();
+        for (n, other) in [(a, sc), (c, sa)] {
+            let nb = &mut neighbours[n as usize];
+            nb[0] = nb[0].min(other);
+            nb[1] = nb[1].max(other);
+        }
+    }
+    let thickness = b.params.thickness;
+    surface
+        .nodes
+        .iter()
+        .filter_map(|&n| {
+            let i = n as usize;
+            let xn = x(n);
+            let gap = (xn[0] - wall.point[0]) * nw[0] + (xn[1] - wall.point[1]) * nw[1];
+            if !(length[i] > 0.0 && gap <= TOUCH_FRACTION * length[i]) {
+                return None;
+            }
+            // f_c . n_wall = -(f_elements + f_ext) . n_wall
+            let fc = -(force[i][0] * nw[0] + force[i][1] * nw[1]);
+            Some(NodalPressure {
+                node: n,
+                position: xn,
+                pressure: fc / (length[i] * thickness),
+                length: length[i],
+                along: along(reference(n)),
+                neighbours: neighbours[i],
+            })
+        })
+        .collect()
+}
 
 /// What a metric sees of a finished run.
 pub struct RunData<'a> {
@@ -114,6 +231,52 @@ pub fn measure(m: &Metric, r: &RunData<'_>) -> std::result::Result<f64, String> 
                     .max((sxy - rxy).abs());
             }
             err
+        }
+        MetricKind::KineticRatio => {
+            if last.0.internal <= 0.0 {
+                return Err("no internal energy at the end".into());
+            }
+            last.0.kinetic / last.0.internal
+        }
+        MetricKind::FinalForce => last
+            .0
+            .contacts
+            .get(contact()?)
+            .map_or(0.0, |c| c.force[comp].abs()),
+        MetricKind::PeakPressure | MetricKind::ContactHalfWidth | MetricKind::EdgeError => {
+            let name = m.contact.as_deref().unwrap_or("");
+            let wall = r
+                .model
+                .walls
+                .iter()
+                .find(|w| w.name == name)
+                .ok_or_else(|| format!("no rigid wall named {name:?}"))?;
+            let p = contact_pressures(r.model, r.displacement, body()?, wall, last.0.time);
+            if !p.iter().any(|x| x.pressure > 0.0) {
+                return Err(format!("no contact pressure on body {:?}", m.body));
+            }
+            let loaded: Vec<&NodalPressure> = p.iter().filter(|x| x.pressure > 0.0).collect();
+            let a = 0.5 * loaded.iter().map(|x| x.length).sum::<f64>();
+            match m.kind {
+                MetricKind::PeakPressure => p.iter().map(|x| x.pressure).fold(0.0, f64::max),
+                MetricKind::ContactHalfWidth => a,
+                _ => {
+                    // The element sizes across the two edges of the loaded zone: from the outermost
+                    // loaded node to its outer neighbour.
+                    let first = loaded.iter().min_by(|u, v| u.along.total_cmp(&v.along));
+                    let last = loaded.iter().max_by(|u, v| u.along.total_cmp(&v.along));
+                    let (Some(first), Some(last)) = (first, last) else {
+                        return Err("no loaded node".into());
+                    };
+                    let h = 0.5
+                        * ((last.neighbours[1] - last.along) + (first.along - first.neighbours[0]));
+                    if !(h.is_finite() && h > 0.0) {
+                        return Err("no surface node beyond the loaded zone".into());
+                    }
+                    let a_ref = m.half_width.ok_or("no half_width")?;
+                    (a - a_ref) / h
+                }
+            }
         }
     })
 }

@@ -116,3 +116,118 @@ fn a_missed_bound_makes_verify_exit_4_and_name_the_case() {
     assert!(out.join("rods.svg").exists() && out.join("rods.png").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A plane-strain block [-0.5, 0.5] x [0, 0.5] pressed by p = 1e-3 E onto a frictionless rigid
+/// wall (ramped, mass damping: dynamic relaxation). Exact: uniaxial stress sigma_yy = -p, so
+/// every node on the wall carries the (nominal) contact pressure p, and the loaded zone is the
+/// whole bottom, of reference width 1.
+const BLOCK_ON_WALL: &str = r#"
+[case]
+name = "block"
+title = "Block pressed on a rigid wall"
+reference = "uniaxial stress"
+methods = ["lagrange"]
+size = "n"
+cost_exponent = 3.0
+
+[vars]
+p = 2.1e8
+
+[levels]
+quick = [{ n = 8 }]
+full = [{ n = 8 }]
+
+[[metric]]
+name = "peak_pressure"
+kind = "peak_pressure"
+body = "block"
+contact = "wall"
+reference = 2.1e8
+
+[[metric]]
+name = "half_width"
+kind = "contact_half_width"
+body = "block"
+contact = "wall"
+reference = 0.5
+
+[[metric]]
+name = "contact_force"
+kind = "final_force"
+contact = "wall"
+component = "y"
+reference = 2.1e8
+
+[[metric]]
+name = "kinetic_ratio"
+kind = "kinetic_ratio"
+reference = 0.0
+scale = 1.0
+
+[template]
+scene = '''
+[run]
+end_time = 1.0e-2
+history_interval = 1.0e-3
+mass_damping = 1.2e4
+
+[[material]]
+name = "steel"
+model = "linear_elastic"
+density = 7850.0
+youngs_modulus = 2.1e11
+poisson_ratio = 0.3
+
+[[body]]
+name = "block"
+material = "steel"
+formulation = "plane_strain"
+hourglass = { form = "stiffness", coefficient = 0.1 }
+mesh = { rectangle = { origin = [-0.5, 0.0], size = [1.0, 0.5], cells = [${n}, ${n / 2}] } }
+
+[[rigid_wall]]
+name = "wall"
+point = [0.0, 0.0]
+normal = [0.0, 1.0]
+method = "lagrange"
+
+[[pressure]]
+body = "block"
+region = { min = [-0.51, 0.49], max = [0.51, 0.51] }
+value = ${p}
+ramp = 2.0e-3
+
+[[boundary]]
+body = "block"
+region = { min = [-0.01, -0.01], max = [0.01, 0.51] }
+velocity = { x = 0.0 }
+'''
+"#;
+
+#[test]
+fn contact_pressure_metrics_give_the_uniform_pressure_of_a_block_pressed_on_a_wall() {
+    let dir = tmp_dir("verify-pressure");
+    let cases = dir.join("cases");
+    std::fs::create_dir_all(&cases).unwrap();
+    std::fs::write(cases.join("block.toml"), BLOCK_ON_WALL).unwrap();
+    let out = dir.join("out");
+    let o = quick_cpu_verify(&cases, &out);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("results.csv")).expect("results.csv");
+    let value = |metric: &str| -> f64 {
+        let line = csv
+            .lines()
+            .find(|l| l.split(',').nth(7) == Some(metric))
+            .unwrap_or_else(|| panic!("{metric} missing: {csv}"));
+        line.split(',').nth(9).unwrap().parse().unwrap()
+    };
+    let p = 2.1e8;
+    // Every wall node carries p (corners: half the force over half the tributary length).
+    assert!((value("peak_pressure") / p - 1.0).abs() < 1e-6, "{csv}");
+    // The whole bottom is loaded.
+    assert!((value("half_width") / 0.5 - 1.0).abs() < 1e-12, "{csv}");
+    assert!((value("contact_force") / p - 1.0).abs() < 1e-6, "{csv}");
+    assert!(value("kinetic_ratio") < 1e-6, "{csv}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
