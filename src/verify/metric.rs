@@ -252,10 +252,10 @@ pub fn measure(m: &Metric, r: &RunData<'_>) -> std::result::Result<f64, String> 
                 .find(|w| w.name == name)
                 .ok_or_else(|| format!("no rigid wall named {name:?}"))?;
             let p = contact_pressures(r.model, r.displacement, body()?, wall, last.0.time);
-            if !p.iter().any(|x| x.pressure > 0.0) {
+            let loaded: Vec<&NodalPressure> = p.iter().filter(|x| x.pressure > 0.0).collect();
+            if loaded.is_empty() {
                 return Err(format!("no contact pressure on body {:?}", m.body));
             }
-            let loaded: Vec<&NodalPressure> = p.iter().filter(|x| x.pressure > 0.0).collect();
             let a = 0.5 * loaded.iter().map(|x| x.length).sum::<f64>();
             match m.kind {
                 MetricKind::PeakPressure => p.iter().map(|x| x.pressure).fold(0.0, f64::max),
