@@ -4,7 +4,6 @@
 //   next step (sample / snapshot / end, same rules as step::Clock) and the indirect dispatch sizes.
 
 const RG: u32 = 256u;
-const MAX_INSTANCES: u32 = 72u;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read_write> ctrl: Control;
@@ -18,12 +17,13 @@ const MAX_INSTANCES: u32 = 72u;
 // params.sum_groups == 0): two dispatches fewer per step, where each dispatch costs more than the work.
 @group(0) @binding(8) var<storage, read> elem_dt: array<f32>;
 @group(0) @binding(9) var<storage, read> sample_src: array<vec4<f32>>;
+// Each instance's sum on sample steps (bodies, elements, constraints, loads), by thread 0.
+@group(0) @binding(10) var<storage, read_write> inst_res: array<vec4<f32>>;
 
 var<workgroup> sh_u: u32;
 var<workgroup> sh_dt: array<f32, RG>;
 var<workgroup> sh_ix: array<u32, RG>;
 var<workgroup> sh_sum: array<vec4<f32>, RG>;
-var<workgroup> sh_res: array<vec4<f32>, MAX_INSTANCES>;
 
 fn fail(code: u32, index: u32, value: f32) {
     ctrl.state = STATE_FAILED;
@@ -159,7 +159,7 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
                 workgroupBarrier();
             }
             if (l == 0u) {
-                sh_res[r] = sh_sum[0];
+                inst_res[r] = sh_sum[0];
             }
             workgroupBarrier();
         }
@@ -177,21 +177,21 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
         let base = (ctrl.rows % params.row_capacity) * params.row_stride;
         var ke = 0.0;
         for (var b = 0u; b < nb; b++) {
-            ke += sh_res[b].x;
-            let v = sh_res[b].yz * instances[b].scale;
+            ke += inst_res[b].x;
+            let v = inst_res[b].yz * instances[b].scale;
             history[base + 9u + 2u * b] = v.x;
             history[base + 10u + 2u * b] = v.y;
         }
-        let el = sh_res[nb];
+        let el = inst_res[nb];
         var ext = 0.0;
         if (params.n_cons > 0u) {
             // Accumulated reaction work minus half of this step's (shared with the next interval).
-            ext = sh_res[nb + 1u].x - 0.5 * sh_res[nb + 1u].y;
+            ext = inst_res[nb + 1u].x - 0.5 * inst_res[nb + 1u].y;
         }
         var viscous = el.w;
         if (params.loads != 0u) {
             // Pressure and damping work (accumulated, and this step's part after t_n; loads.wgsl).
-            let w = sh_res[nb + select(1u, 2u, params.n_cons > 0u)];
+            let w = inst_res[nb + select(1u, 2u, params.n_cons > 0u)];
             ext += w.x - w.y;
             viscous -= w.z - w.w;
         }

@@ -55,7 +55,7 @@ fn asset(name: &str) -> String {
 fn every_shader_variant_validates_with_naga() {
     for features in Features::all() {
         for (name, src) in Kernels::sources() {
-            let wgsl = shader::source(src, features);
+            let wgsl = shader::source(&src, features);
             shader::validate(name, &wgsl).unwrap_or_else(|e| panic!("{features:?}: {e}"));
         }
     }

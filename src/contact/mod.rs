@@ -67,6 +67,8 @@ struct Pass {
     method: ContactMethod,
     /// Whether the slave body is the interface's first body.
     slave_is_first: bool,
+    /// Slave and master bodies.
+    bodies: [u32; 2],
     /// Whether the contact has the reverse pass too.
     two_pass: bool,
     /// Slave nodes (local indices).
@@ -258,6 +260,7 @@ impl ContactSet {
                     interface: iface,
                     method: c.method,
                     slave_is_first,
+                    bodies: [slave as u32, master as u32],
                     two_pass: c.two_pass,
                     slaves,
                     neighbours,
@@ -341,6 +344,12 @@ impl ContactSet {
         };
         set.penalty_step = set.compute_penalty_step();
         Some(set)
+    }
+
+    /// Slots of the GPU tables: every pass's slave nodes and every wall's nodes.
+    pub fn slot_count(&self) -> usize {
+        self.passes.iter().map(|p| p.slaves.len()).sum::<usize>()
+            + self.walls.iter().map(|w| w.nodes.len()).sum::<usize>()
     }
 
     /// Names of the contacts and walls, in history-column order.
@@ -1074,6 +1083,27 @@ pub struct SlotTable {
     pub point: [f64; 2],
     /// Wall penalty stiffness of the node.
     pub stiffness: f64,
+    /// The pass (`u32::MAX` for a wall).
+    pub pass: u32,
+    /// The slave node's body.
+    pub body: u32,
+    /// A group pass: the impulse's sign on the first body follows the body order.
+    pub group: bool,
+    /// The pass admits segments of the slave's own body.
+    pub self_contact: bool,
+}
+
+/// A master segment of the GPU tables.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentTable {
+    /// Local nodes a -> b.
+    pub nodes: [u32; 2],
+    /// Penalty stiffness.
+    pub stiffness: f64,
+    /// Its pass.
+    pub pass: u32,
+    /// Its body.
+    pub body: u32,
 }
 
 /// The flat, static tables of a contact set, for the GPU kernel.
@@ -1087,8 +1117,12 @@ pub struct Tables {
     pub mass: Vec<f64>,
     /// Slots: every pass's slave nodes in order, then every wall's nodes.
     pub slots: Vec<SlotTable>,
-    /// Master segments of all passes (local nodes a -> b) with their penalty stiffness.
-    pub segments: Vec<([u32; 2], f64)>,
+    /// Master segments of all passes.
+    pub segments: Vec<SegmentTable>,
+    /// Reference positions of the local nodes.
+    pub reference: Vec<[f64; 2]>,
+    /// Search margin.
+    pub margin: f64,
 }
 
 /// The result of a search in slot form: candidate segments per slot (CSR) and a colouring of the
@@ -1107,10 +1141,10 @@ pub struct SearchTables {
 
 impl ContactSet {
     /// The static tables of the GPU kernel.
-    pub fn tables(&self) -> Tables {
+    pub fn tables(&self, model: &Model) -> Tables {
         let mut slots = Vec::new();
         let mut segments = Vec::new();
-        for p in &self.passes {
+        for (pi, p) in self.passes.iter().enumerate() {
             for (si, &s) in p.slaves.iter().enumerate() {
                 slots.push(SlotTable {
                     interface: p.interface as u32,
@@ -1122,9 +1156,23 @@ impl ContactSet {
                     normal: [0.0; 2],
                     point: [0.0; 2],
                     stiffness: 0.0,
+                    pass: pi as u32,
+                    body: p.bodies[0],
+                    group: false,
+                    self_contact: false,
                 });
             }
-            segments.extend(p.segments.iter().copied().zip(p.stiffness.iter().copied()));
+            segments.extend(
+                p.segments
+                    .iter()
+                    .zip(&p.stiffness)
+                    .map(|(&nodes, &stiffness)| SegmentTable {
+                        nodes,
+                        stiffness,
+                        pass: pi as u32,
+                        body: p.bodies[1],
+                    }),
+            );
         }
         for w in &self.walls {
             for (idx, &l) in w.nodes.iter().enumerate() {
@@ -1138,6 +1186,10 @@ impl ContactSet {
                     normal: w.normal,
                     point: w.point,
                     stiffness: w.stiffness[idx],
+                    pass: u32::MAX,
+                    body: u32::MAX,
+                    group: false,
+                    self_contact: false,
                 });
             }
         }
@@ -1147,6 +1199,12 @@ impl ContactSet {
             mass: self.mass.clone(),
             slots,
             segments,
+            reference: self
+                .nodes
+                .iter()
+                .map(|&g| model.position[g as usize])
+                .collect(),
+            margin: self.margin,
         }
     }
 

@@ -22,7 +22,7 @@ pub struct Kernels {
     /// Velocity boundaries (only for scenes that have them).
     pub boundary: Option<wgpu::ComputePipeline>,
     /// Contact (only for scenes with contact or rigid walls).
-    pub contact: Option<wgpu::ComputePipeline>,
+    pub contact: Option<contact::ContactKernels>,
     /// Pressure forces (only for scenes with pressure loads).
     pub pressure: Option<wgpu::ComputePipeline>,
     /// Work of pressure and damping impulses (only for scenes with either; `features.loads`).
@@ -49,7 +49,7 @@ impl Kernels {
             control_dt: control::dt_pipeline(device, features),
             node: node::pipeline(device, features),
             boundary: boundaries.then(|| boundary::pipeline(device, features)),
-            contact: contact.then(|| contact::pipeline(device, features)),
+            contact: contact.then(|| contact::ContactKernels::new(device, features)),
             pressure: pressure.then(|| loads::pressure_pipeline(device, features)),
             load_work: features
                 .loads
@@ -59,16 +59,31 @@ impl Kernels {
         }
     }
 
-    /// Every kernel source with its name, for validation.
-    pub fn sources() -> [(&'static str, &'static str); 7] {
-        [
-            ("contact", contact::SOURCE),
-            ("loads", loads::SOURCE),
-            ("element", element::SOURCE),
-            ("node", node::SOURCE),
-            ("boundary", boundary::SOURCE),
-            ("reduce", reduce::SOURCE),
-            ("control", control::SOURCE),
+    /// Every kernel source with its name, for validation (the contact stages with their shared
+    /// contact declarations; `shader::source` prepends `common.wgsl`).
+    pub fn sources() -> Vec<(&'static str, String)> {
+        let c = |parts: &[&str]| {
+            let mut s = String::from(contact::COMMON);
+            for p in parts {
+                s.push('\n');
+                s.push_str(p);
+            }
+            s
+        };
+        vec![
+            ("contact_search", c(&[contact::search::SOURCE])),
+            ("contact_narrow", c(&[contact::narrow::SOURCE])),
+            (
+                "contact_solve",
+                c(&[contact::narrow::SOURCE, contact::solve::SOURCE]),
+            ),
+            ("contact_report", c(&[contact::report::SOURCE])),
+            ("loads", loads::SOURCE.into()),
+            ("element", element::SOURCE.into()),
+            ("node", node::SOURCE.into()),
+            ("boundary", boundary::SOURCE.into()),
+            ("reduce", reduce::SOURCE.into()),
+            ("control", control::SOURCE.into()),
         ]
     }
 }

@@ -133,8 +133,6 @@ pub const STATE_DONE: u32 = 2;
 pub const STATE_FAILED: u32 = 3;
 /// "No index" marker.
 pub const NONE: u32 = u32::MAX;
-/// Most sum instances (bodies + 2) control.wgsl can hold.
-pub const MAX_INSTANCES: usize = 72;
 
 const _: () = assert!(std::mem::size_of::<Params>() == 80);
 const _: () = assert!(std::mem::size_of::<Control>() == 84);

@@ -11,7 +11,7 @@ use crate::plan::{Plan, Stage};
 use crate::step::cpu::CpuSolver;
 use crate::step::{Counters, Event, Failure, Sample, Schedule, Snapshot, Solver};
 
-use super::contact::STATE_SEARCH;
+use super::contact::{ContactCounters, STATE_SEARCH_GROW};
 use super::context::GpuContext;
 use super::kernels::{Features, Kernels};
 use super::layout::*;
@@ -40,8 +40,10 @@ pub struct GpuSolver {
     dt_estimate: f64,
     counters: Counters,
     finished: bool,
-    /// Staging buffer of the node state for contact searches (created at the first search).
-    search_readback: Option<wgpu::Buffer>,
+    /// Offset of the contact counters in `readback`.
+    counters_at: u64,
+    /// Staging buffer of the new history rows (main and contact rows, packed).
+    rows_readback: wgpu::Buffer,
 }
 
 /// What failure messages need of the model.
@@ -99,6 +101,23 @@ impl GpuSolver {
         schedule: Schedule,
         fused: Option<bool>,
     ) -> Result<Self> {
+        Self::with_options(ctx, model, plan, schedule, fused, None)
+    }
+
+    /// As [`GpuSolver::with_reductions`], also choosing the contact solve path: one dispatch per
+    /// colour and sweep (`Some(true)`) or one workgroup (`Some(false)`); `None` decides by adapter
+    /// and size ([`super::contact::multi_path`]).
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the model does not fit.
+    pub fn with_options(
+        ctx: Arc<GpuContext>,
+        model: &Model,
+        plan: &Plan,
+        schedule: Schedule,
+        fused: Option<bool>,
+        contact_multi: Option<bool>,
+    ) -> Result<Self> {
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -118,7 +137,16 @@ impl GpuSolver {
             plan.has(Stage::Contact),
             plan.has(Stage::Pressure),
         );
-        let state = GpuState::new(device, &kernels, model, plan, &schedule, fused);
+        let state = GpuState::new(
+            device,
+            &kernels,
+            model,
+            plan,
+            &schedule,
+            fused,
+            ctx.info.device_type,
+            contact_multi,
+        );
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
                 "kernel or buffer setup rejected by {}: {e}",
@@ -127,10 +155,26 @@ impl GpuSolver {
         }
         let mut state = state?;
         let history_bytes = 4 * (ROW_CAPACITY * state.params.row_stride) as u64;
-        let contact_bytes = state.contact.as_ref().map_or(0, |c| c.history.size());
+        let contact_row_bytes = state
+            .contact
+            .as_ref()
+            .map_or(0, |c| 4 * (ROW_CAPACITY * c.params.hist_stride) as u64);
+        let counters_at = 256;
+        let rows_readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("rows_readback"),
+            size: history_bytes + contact_row_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        state.allocated.push(("rows_readback", rows_readback.size()));
+        let counters_bytes = if state.contact.is_some() {
+            std::mem::size_of::<ContactCounters>() as u64
+        } else {
+            0
+        };
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: 256 + history_bytes + contact_bytes,
+            size: counters_at + counters_bytes,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -178,7 +222,8 @@ impl GpuSolver {
             dt_estimate,
             counters: Counters::default(),
             finished: false,
-            search_readback: None,
+            counters_at,
+            rows_readback,
         })
     }
 
@@ -238,28 +283,27 @@ impl GpuSolver {
             0,
             std::mem::size_of::<Control>() as u64,
         );
-        enc.copy_buffer_to_buffer(
-            &self.state.history,
-            0,
-            &self.readback,
-            256,
-            self.state.history.size(),
-        );
         if let Some(c) = &self.state.contact {
             enc.copy_buffer_to_buffer(
-                &c.history,
+                &c.ctl,
                 0,
                 &self.readback,
-                256 + self.state.history.size(),
-                c.history.size(),
+                self.counters_at,
+                std::mem::size_of::<ContactCounters>() as u64,
             );
         }
         self.ctx.queue.submit([enc.finish()]);
         self.counters.submissions += 1;
     }
 
-    fn map_read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
-        let slice = buffer.slice(..);
+    fn map_read(&mut self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+        self.map_prefix(buffer, buffer.size())
+    }
+
+    /// Maps and copies the first `len` bytes of `buffer` (counted in the bytes read back).
+    fn map_prefix(&mut self, buffer: &wgpu::Buffer, len: u64) -> Result<Vec<u8>> {
+        self.counters.bytes_read_back += len;
+        let slice = buffer.slice(..len);
         slice.map_async(wgpu::MapMode::Read, |_| {});
         self.ctx
             .device
@@ -275,17 +319,37 @@ impl GpuSolver {
 
     /// Reads back the control block and the new history rows.
     fn read(&mut self, events: &mut Vec<Event>) -> Result<()> {
-        let bytes = self.map_read(&self.readback)?;
+        let readback = self.readback.clone();
+        let bytes = self.map_read(&readback)?;
         self.counters.readbacks += 1;
         let ctrl: Control = bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<Control>()]);
-        let hist_bytes = self.state.history.size() as usize;
-        let hist: &[u8] = &bytes[256..256 + hist_bytes];
-        let chist: &[u8] = &bytes[256 + hist_bytes..];
+        if let Some(c) = self.state.contact.as_mut() {
+            let at = self.counters_at as usize;
+            c.counters = bytemuck::pod_read_unaligned(
+                &bytes[at..at + std::mem::size_of::<ContactCounters>()],
+            );
+        }
         let stride = self.state.params.row_stride as usize;
+        let cstride = self
+            .state
+            .contact
+            .as_ref()
+            .map_or(0, |c| c.params.hist_stride as usize);
+        let new_rows = ctrl.rows.saturating_sub(self.rows_read).min(ROW_CAPACITY) as usize;
+        let hist_len = (4 * stride * new_rows) as u64;
+        let rows_bytes = if new_rows > 0 {
+            self.read_rows(new_rows, hist_len, cstride)?
+        } else {
+            Vec::new()
+        };
+        let hist: &[u8] = &rows_bytes[..hist_len.min(rows_bytes.len() as u64) as usize];
+        let chist: &[u8] = &rows_bytes[hist.len()..];
         let nb = self.names.bodies.len();
         let mut row_events = Vec::new();
+        let first_row = self.rows_read;
         while self.rows_read < ctrl.rows {
-            let base = (self.rows_read % ROW_CAPACITY) as usize * stride;
+            let j = (self.rows_read - first_row) as usize;
+            let base = j * stride;
             let w = |i: usize| -> f32 {
                 bytemuck::pod_read_unaligned(&hist[4 * (base + i)..4 * (base + i) + 4])
             };
@@ -307,7 +371,7 @@ impl GpuSolver {
             let mut sample = sample;
             if let Some(c) = &self.state.contact {
                 let cs = c.params.hist_stride as usize;
-                let cb = (self.rows_read % ROW_CAPACITY) as usize * cs;
+                let cb = j * cs;
                 let r = |i: usize| -> f64 {
                     let x: f32 =
                         bytemuck::pod_read_unaligned(&chist[4 * (cb + i)..4 * (cb + i) + 4]);
@@ -329,8 +393,8 @@ impl GpuSolver {
             self.dt_estimate = ctrl.dt_next as f64;
         }
         self.ctrl = ctrl;
-        if ctrl.state == STATE_SEARCH {
-            self.contact_search()?;
+        if ctrl.state == STATE_SEARCH_GROW {
+            self.contact_grow()?;
             events.extend(row_events);
             return Ok(());
         }
@@ -405,67 +469,76 @@ impl GpuSolver {
         Ok(())
     }
 
-    /// The contact kernel stopped the step for a search: reads the contact nodes' (u, v), searches
-    /// on the host, uploads the candidates and resumes the step from its contact stage.
-    fn contact_search(&mut self) -> Result<()> {
-        let device = &self.ctx.device;
-        let nodes_size = self.state.nodes.size();
-        if self.search_readback.is_none() {
-            self.state.allocated.push(("search_readback", nodes_size));
-        }
-        let staging = self
-            .search_readback
-            .get_or_insert_with(|| {
-                device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("search_readback"),
-                    size: nodes_size,
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                })
-            })
-            .clone();
-        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("search_read"),
-        });
-        enc.copy_buffer_to_buffer(&self.state.nodes, 0, &staging, 0, nodes_size);
-        self.ctx.queue.submit([enc.finish()]);
-        let bytes = self.map_read(&staging)?;
-        self.counters.readbacks += 1;
-        let all: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-        let (Some(c), Some(p)) = (self.state.contact.as_mut(), self.kernels.contact.as_ref())
-        else {
-            return Err(Error::Gpu(
-                "search requested without contact buffers".into(),
-            ));
+    /// Copies the `n` history rows from `rows_read` on (main rows, then contact rows of
+    /// `cstride` words, each packed in order) into the staging buffer and reads them.
+    fn read_rows(&mut self, n: usize, hist_len: u64, cstride: usize) -> Result<Vec<u8>> {
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rows") });
+        let cap = ROW_CAPACITY as usize;
+        let first = self.rows_read as usize % cap;
+        let stride = self.state.params.row_stride as usize;
+        let mut copy = |src: &wgpu::Buffer, words: usize, dst_at: u64| {
+            let head = n.min(cap - first);
+            enc.copy_buffer_to_buffer(
+                src,
+                (4 * first * words) as u64,
+                &self.rows_readback,
+                dst_at,
+                (4 * head * words) as u64,
+            );
+            if head < n {
+                enc.copy_buffer_to_buffer(
+                    src,
+                    0,
+                    &self.rows_readback,
+                    dst_at + (4 * head * words) as u64,
+                    (4 * (n - head) * words) as u64,
+                );
+            }
         };
-        let uv: Vec<[f32; 4]> = c.nodes().iter().map(|&g| all[g as usize]).collect();
-        let last = self.ctrl.flags & FLAG_END != 0;
-        c.search(device, &self.ctx.queue, p, &uv, self.ctrl.dt_next, last);
+        copy(&self.state.history, stride, 0);
+        if let Some(c) = &self.state.contact {
+            copy(&c.history, cstride, hist_len);
+        }
+        self.ctx.queue.submit([enc.finish()]);
+        let rb = self.rows_readback.clone();
+        self.map_prefix(&rb, hist_len + (4 * n * cstride) as u64)
+    }
+
+    /// A contact search stopped the step because a contact buffer is too small: grows it (from
+    /// the counters just read back) and resumes the step from its contact stage.
+    fn contact_grow(&mut self) -> Result<()> {
+        let device = &self.ctx.device;
+        let (Some(c), Some(k)) = (self.state.contact.as_mut(), self.kernels.contact.as_ref())
+        else {
+            return Err(Error::Gpu("contact grow requested without contact buffers".into()));
+        };
+        c.grow(device, &self.ctx.queue, k)?;
         self.ctx.queue.write_buffer(
             &self.state.ctrl,
             CONTROL_STATE_OFFSET,
             bytemuck::bytes_of(&STATE_RUNNING),
         );
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("searched step"),
+            label: Some("resumed step"),
         });
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("searched step"),
+                label: Some("resumed step"),
                 timestamp_writes: None,
             });
             self.state.record_tail(&self.kernels, &mut pass);
         }
         self.ctx.queue.submit([enc.finish()]);
         self.counters.submissions += 1;
-        if let Some(c) = self.state.contact.as_mut() {
-            c.resume(&self.ctx.queue);
-        }
         Ok(())
     }
 
     fn read_snapshot(&mut self, step: u64, time: f64) -> Result<Snapshot> {
-        let (Some(rb), Some(u_snap)) = (&self.snap_readback, &self.state.u_snap) else {
+        let (Some(rb), Some(u_snap)) = (self.snap_readback.clone(), self.state.u_snap.clone())
+        else {
             return Err(Error::Gpu(
                 "snapshot requested without field buffers".into(),
             ));
@@ -477,11 +550,11 @@ impl GpuSolver {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("snapshot"),
             });
-        enc.copy_buffer_to_buffer(u_snap, 0, rb, 0, 8 * nn);
-        enc.copy_buffer_to_buffer(&self.state.v_prev, 0, rb, 8 * nn, 8 * nn);
-        enc.copy_buffer_to_buffer(&self.state.nodes, 0, rb, 16 * nn, 16 * nn);
+        enc.copy_buffer_to_buffer(&u_snap, 0, &rb, 0, 8 * nn);
+        enc.copy_buffer_to_buffer(&self.state.v_prev, 0, &rb, 8 * nn, 8 * nn);
+        enc.copy_buffer_to_buffer(&self.state.nodes, 0, &rb, 16 * nn, 16 * nn);
         self.ctx.queue.submit([enc.finish()]);
-        let bytes = self.map_read(rb)?;
+        let bytes = self.map_read(&rb)?;
         self.counters.readbacks += 1;
         let f: &[f32] = bytemuck::cast_slice(&bytes);
         let n = nn as usize;
@@ -693,9 +766,18 @@ impl Solver for GpuSolver {
     }
 
     fn counters(&self) -> Counters {
-        Counters {
-            contact_searches: self.state.contact.as_ref().map_or(0, |c| c.searches),
-            ..self.counters
+        let mut out = self.counters;
+        if let Some(c) = &self.state.contact {
+            let k = c.counters;
+            out.contact_searches = k.searches as u64;
+            out.contact_sweeps_max = k.sweeps_max as u64;
+            out.contact_unconverged = k.unconverged as u64;
+            out.contact_sweeps_mean = if k.solve_steps > 0 {
+                k.sweeps_total as f64 / k.solve_steps as f64
+            } else {
+                0.0
+            };
         }
+        out
     }
 }

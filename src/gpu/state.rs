@@ -89,6 +89,11 @@ impl Alloc<'_> {
             })
     }
 
+    /// Records a buffer created elsewhere.
+    pub(crate) fn record(&mut self, name: &'static str, size: u64) {
+        self.list.push((name, size));
+    }
+
     fn zeroed(&mut self, name: &'static str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
         let size = size.max(16);
         self.list.push((name, size));
@@ -144,17 +149,13 @@ impl GpuState {
         plan: &Plan,
         schedule: &Schedule,
         fused: Option<bool>,
+        device_type: wgpu::DeviceType,
+        contact_multi: Option<bool>,
     ) -> Result<GpuState> {
         let nn = model.node_count();
         let ne = model.element_count();
         let nc = model.constraints.len();
         let nb = model.bodies.len();
-        if nb + 2 > MAX_INSTANCES {
-            return Err(Error::Gpu(format!(
-                "the GPU backend supports at most {} bodies (scene has {nb})",
-                MAX_INSTANCES - 2
-            )));
-        }
         let max_groups = 65_535usize;
         if ne.div_ceil(element::WORKGROUP as usize) > max_groups
             || nn.div_ceil(node::WORKGROUP as usize) > max_groups
@@ -408,6 +409,7 @@ impl GpuState {
             storage | U::COPY_SRC,
         );
         let times_buf = a.init("times", bytemuck::cast_slice(&times), storage);
+        let inst_res = a.zeroed("instance_sums", 16 * instances.len() as u64, storage);
         let indirect_init = [sum_groups, 1, 1];
         let indirect = a.init(
             "indirect",
@@ -416,20 +418,26 @@ impl GpuState {
         );
 
         let contact = match (contact_set, &kernels.contact) {
-            (Some(set), Some(p)) => Some(ContactState::new(
-                device,
-                p,
-                model,
-                set,
-                Shared {
-                    ctrl: &ctrl,
-                    nodes: &nodes,
-                    v_prev: &v_prev,
-                    sample_src: &sample_src,
-                },
-                ROW_CAPACITY,
-                &mut a,
-            )),
+            (Some(set), Some(p)) => {
+                let multi = contact_multi.unwrap_or_else(|| {
+                    super::contact::multi_path(set.slot_count(), device_type)
+                });
+                Some(ContactState::new(
+                    device,
+                    p,
+                    model,
+                    set,
+                    Shared {
+                        ctrl: &ctrl,
+                        nodes: &nodes,
+                        v_prev: &v_prev,
+                        sample_src: &sample_src,
+                    },
+                    ROW_CAPACITY,
+                    multi,
+                    &mut a,
+                )?)
+            }
             _ => None,
         };
 
@@ -552,6 +560,7 @@ impl GpuState {
                     (6, &times_buf),
                     (7, &indirect),
                     (9, &sample_src),
+                    (10, &inst_res),
                 ],
             ),
         };
@@ -611,10 +620,8 @@ impl GpuState {
     /// (After a search stopped a step in its contact stage, the host resumes it with this.)
     pub fn record_tail(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
         let b = &self.bind;
-        if let (Some(p), Some(c)) = (&kernels.contact, &self.contact) {
-            pass.set_pipeline(p);
-            pass.set_bind_group(0, &c.bind, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
+        if let (Some(k), Some(c)) = (&kernels.contact, &self.contact) {
+            c.record(k, pass);
         }
         if let (Some(p), Some(bg)) = (&kernels.load_work, &b.load_work) {
             pass.set_pipeline(p);

@@ -40,6 +40,16 @@ pub struct Summary {
     /// Contact broad-phase searches (0 without contact): one every step means the nodes move
     /// more than half the search margin per step.
     pub contact_searches: u64,
+    /// Bytes read back from the device over the run (GPU; 0 on the CPU): history rows,
+    /// snapshots and small counters only.
+    pub bytes_read_back: u64,
+    /// Lagrange contact: projected Gauss-Seidel sweeps per step that has Lagrange constraints,
+    /// mean and largest (0 without).
+    pub contact_sweeps_mean: f64,
+    /// See `contact_sweeps_mean`.
+    pub contact_sweeps_max: u64,
+    /// Lagrange contact: steps whose sweeps stopped at the sweep limit before the tolerance.
+    pub contact_unconverged: u64,
     /// Seconds per stage where the backend measures them.
     pub stage_seconds: Vec<(String, f64)>,
     /// History rows written.

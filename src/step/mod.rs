@@ -173,6 +173,15 @@ pub struct Counters {
     pub readbacks: u64,
     /// Contact broad-phase searches (0 without contact).
     pub contact_searches: u64,
+    /// Bytes copied from the device to the host so far (GPU; 0 on the CPU).
+    pub bytes_read_back: u64,
+    /// Lagrange contact: projected Gauss-Seidel sweeps per step with Lagrange constraints, mean
+    /// and largest (0 without).
+    pub contact_sweeps_mean: f64,
+    /// See `contact_sweeps_mean`.
+    pub contact_sweeps_max: u64,
+    /// Lagrange contact: steps whose sweeps stopped at the sweep limit before the tolerance.
+    pub contact_unconverged: u64,
 }
 
 /// A time integrator of a model: the CPU reference or the GPU backend.

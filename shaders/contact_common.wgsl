@@ -1,0 +1,231 @@
+// Shared declarations of the contact kernels (prepended after common.wgsl to each contact stage:
+// contact_search.wgsl, contact_narrow.wgsl, contact_solve.wgsl, contact_report.wgsl). Every
+// contact kernel binds the same bind group 0 (one explicit layout, built once); the kernels that
+// write indirect dispatch sizes also bind group 1. Rust mirrors: src/gpu/contact/mod.rs.
+//
+// Local contact nodes are numbered 0..n_local; a slot is one pass's slave node or one wall's node;
+// segments are the master segments of every pass. Workspace arrays live in `ws` (u32 words) and
+// `fws` (vec4<f32>) at the offsets of ContactParams.
+
+const CG: u32 = 64u;                  // threads per workgroup of the per-item contact kernels
+const SG: u32 = 256u;                 // threads of the one-workgroup kernels (scans, one-group solve)
+const KIND_NONE: u32 = 0u;
+const KIND_LAGRANGE: u32 = 1u;
+const KIND_PENALTY: u32 = 2u;
+const XI_TOLERANCE: f32 = 1e-6;       // crate::contact::narrow::XI_TOLERANCE
+const TIE_TOLERANCE: f32 = 1e-4;      // crate::contact::narrow::TIE_TOLERANCE
+const STATE_SEARCH_GROW: u32 = 4u;    // the host grows a contact buffer and resumes the step
+
+const SLOT_PENALTY: u32 = 0x10000u;
+const SLOT_WALL: u32 = 0x20000u;
+const SLOT_SECOND: u32 = 0x40000u;    // two-body pass whose slave is the interface's second body
+const SLOT_GROUP: u32 = 0x80000u;     // group pass: the sign follows the body order
+const SLOT_SELF: u32 = 0x100000u;     // group pass that admits the slave's own body
+
+// Grow requests (ContactCtl.grow bits).
+const GROW_CANDIDATES: u32 = 1u;
+const GROW_COLORS: u32 = 2u;
+const GROW_ROUNDS: u32 = 4u;
+
+struct ContactParams {
+    n_local: u32,
+    n_slots: u32,
+    n_segs: u32,
+    n_ifaces: u32,
+    margin: f32,          // search margin (half the shortest segment)
+    max_sweeps: u32,      // sweeps at most per solve (one-group path) or per round (per-colour path)
+    multi: u32,           // 1: one dispatch per colour (many workgroups); 0: one workgroup
+    hist_stride: u32,     // f32 words per contact history row: 1 + 4 n_ifaces
+    row_capacity: u32,
+    n_buckets: u32,       // hash-grid buckets (a power of two)
+    cand_capacity: u32,   // words of `grow` for candidates; the node adjacency follows
+    adj_capacity: u32,
+    jp_rounds: u32,       // colouring rounds recorded
+    colors_recorded: u32, // colour dispatches recorded per sweep (per-colour path)
+    tolerance: f32,       // a sweep converges when no gap changes by more than this (m)
+    _p0: u32,
+    o_bcount: u32,        // ws offsets
+    o_boff: u32,
+    o_bcur: u32,
+    o_bent: u32,
+    o_ccount: u32,
+    o_coff: u32,
+    o_ncount: u32,
+    o_noff: u32,
+    o_ncur: u32,
+    o_color: u32,
+    o_lcount: u32,        // slots per colour (MAX_COLORS + 1)
+    o_loff: u32,
+    o_lcur: u32,
+    o_list: u32,          // slots in colour order
+    o_iface: u32,         // first slot of each interface (n_ifaces + 1)
+    _p1: u32,
+    f_box: u32,           // fws offsets: segment boxes
+    f_usearch: u32,       // u at the last search per local node (xy)
+    f_rp: u32,            // report partials per slot chunk start
+    f_wp: u32,            // work partials per node chunk
+}
+
+const MAX_COLORS: u32 = 64u;
+
+struct ContactCtl {
+    due: atomic<u32>,         // a search is due this step
+    extent: atomic<u32>,      // f32 bits of the largest segment box side (grid cell size)
+    n_cand: atomic<u32>,      // candidates of the last search
+    need_cand: u32,           // candidates the last search needed (when over capacity)
+    n_adj: u32,
+    searching: atomic<u32>,   // 1 when this step searches
+    n_colors: atomic<u32>,    // colours of the last search
+    searches: u32,
+    grow: atomic<u32>,        // GROW_* requests for the host
+    lagrange: atomic<u32>,    // Lagrange constraints of this step
+    new_cons: atomic<u32>,    // constraints added by the last active-set re-check
+    sweeps: u32,              // sweeps of this step
+    sweeps_total: u32,        // sweeps over the run (steps with Lagrange constraints)
+    sweeps_max: u32,
+    solve_steps: u32,         // steps with Lagrange constraints
+    unconverged: u32,         // solves that stopped at max_sweeps
+    // Per-colour path: the largest gap change of each sweep (f32 bits; 0: the sweep did not run),
+    // and the constraints each active-set re-check added.
+    change: array<atomic<u32>, MAX_SWEEP_SLOTS>,
+    added: array<atomic<u32>, 4>,
+}
+
+const MAX_SWEEP_SLOTS: u32 = 80u;     // (1 + ACTIVE_SET_ROUNDS) x sweeps of the per-colour path
+
+struct Slot {
+    info: u32,            // interface (bits 0-15), SLOT_* flags
+    s: u32,               // slave (local node)
+    np: u32,              // the slave's neighbours along its own surface (passes)
+    nn: u32,
+    normal: vec2<f32>,    // walls: unit normal and a point
+    point: vec2<f32>,
+    k: f32,               // walls: penalty stiffness of the node
+    pass_id: u32,          // pass index (walls: NONE)
+    body: u32,            // the slave's body
+    _p0: u32,
+}
+
+struct Segment {
+    a: u32,
+    b: u32,
+    k: f32,               // penalty stiffness
+    pass_id: u32,
+    body: u32,
+    _p0: u32,
+    _p1: u32,
+    _p2: u32,
+}
+
+struct Cons {
+    kind: u32,
+    a: u32,
+    b: u32,
+    sign: f32,            // impulse on the interface's first body = sign * lambda * n
+    n: vec2<f32>,
+    xi: f32,
+    g0: f32,              // gap at u_{n+1} of the free update
+    w: f32,               // dt (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along n
+    lambda: f32,
+    pen: f32,             // penalty: penetration at u_n
+    dt_warm: f32,         // dt_n of the step that found lambda (Lagrange: the next step's warm start)
+}
+
+@group(0) @binding(0) var<uniform> cp: ContactParams;
+@group(0) @binding(1) var<storage, read_write> ctrl: Control;
+@group(0) @binding(2) var<storage, read_write> nodes: array<vec4<f32>>;   // (u, v)
+@group(0) @binding(3) var<storage, read_write> v_prev: array<vec2<f32>>;
+@group(0) @binding(4) var<storage, read_write> sample_src: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> c_nodes: array<vec2<u32>>; // (global index, mass bits)
+@group(0) @binding(6) var<storage, read_write> c_ref: array<vec4<f32>>;   // (X, 1/m along x, y)
+@group(0) @binding(7) var<storage, read_write> slots: array<Slot>;
+@group(0) @binding(8) var<storage, read_write> segs: array<Segment>;
+// Per local node i: 3i: (u_n, u_n + dt v_free), 3i+1: (v_free, v^{n-1/2}),
+// 3i+2: (v^{n+1/2} kept for the next step, dv).
+@group(0) @binding(9) var<storage, read_write> c_pv: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> cons: array<Cons>;
+@group(0) @binding(12) var<storage, read_write> cc: ContactCtl;
+@group(0) @binding(15) var<storage, read_write> fws: array<vec4<f32>>;
+// History rows (1 + 4 n_ifaces words each, row_capacity rows), then per interface the impulse and
+// time since the last sample, then (work, this step's part after t_n).
+@group(0) @binding(16) var<storage, read_write> c_hist: array<f32>;
+// A small index (colouring round, sweep) per dispatch: the bind group's dynamic offset selects it.
+@group(0) @binding(17) var<uniform> round_index: vec4<u32>;
+// Bindings 13 (`ws`, u32 workspace) and 14 (`grow`: candidates, then the node adjacency) are
+// declared by each stage, atomic where it counts.
+
+fn pos(i: u32) -> vec4<f32> {
+    return c_pv[3u * i];
+}
+
+fn vel(i: u32) -> vec4<f32> {
+    return c_pv[3u * i + 1u];
+}
+
+fn dv(i: u32) -> vec2<f32> {
+    return c_pv[3u * i + 2u].zw;
+}
+
+fn add_dv(i: u32, d: vec2<f32>) {
+    c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, c_pv[3u * i + 2u].zw + d);
+}
+
+// Whether the contact kernels run this step.
+fn contact_running() -> bool {
+    return ctrl.state == STATE_RUNNING;
+}
+
+var<workgroup> sh_state: u32;
+
+// contact_running() as a workgroup-uniform value (for kernels with barriers); `l` the local index.
+fn running_uniform(l: u32) -> bool {
+    if (l == 0u) {
+        sh_state = ctrl.state;
+    }
+    return workgroupUniformLoad(&sh_state) == STATE_RUNNING;
+}
+
+// 1 / (1 + c): mass damping makes the update's masses (1 + c) m (see Control.damp_c).
+fn inv_mass_scale() -> f32 {
+    return 1.0 / (1.0 + ctrl.damp_c);
+}
+
+fn along(i: u32, n: vec2<f32>, inv_scale: f32) -> f32 {
+    let im = c_ref[i].zw * inv_scale;
+    return n.x * n.x * im.x + n.y * n.y * im.y;
+}
+
+// Relative normal velocity change of constraint `c` of slave `s` from the impulses so far.
+fn relative(c: Cons, s: u32) -> f32 {
+    var r = dot(dv(s), c.n);
+    if (c.a != NONE) {
+        r -= (1.0 - c.xi) * dot(dv(c.a), c.n) + c.xi * dot(dv(c.b), c.n);
+    }
+    return r;
+}
+
+// Applies impulse `lambda` along c.n on the slave and its reaction on the master nodes.
+fn apply_impulse(c: Cons, s: u32, lambda: f32, inv_scale: f32) {
+    add_dv(s, lambda * inv_scale * c.n * c_ref[s].zw);
+    if (c.a != NONE) {
+        add_dv(c.a, -(1.0 - c.xi) * lambda * inv_scale * c.n * c_ref[c.a].zw);
+        add_dv(c.b, -c.xi * lambda * inv_scale * c.n * c_ref[c.b].zw);
+    }
+}
+
+// One projected Gauss-Seidel update of slot k's Lagrange constraint; returns the gap change.
+fn pgs_update(k: u32, dt: f32, inv_scale: f32) -> f32 {
+    let c = cons[k];
+    if (c.kind != KIND_LAGRANGE) {
+        return 0.0;
+    }
+    let s = slots[k].s;
+    let g = c.g0 + dt * relative(c, s);
+    let lambda = max(c.lambda - g / c.w, 0.0);
+    let d = lambda - c.lambda;
+    if (d != 0.0) {
+        apply_impulse(c, s, d, inv_scale);
+        cons[k].lambda = lambda;
+    }
+    return abs(d * c.w);
+}

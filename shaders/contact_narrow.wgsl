@@ -1,0 +1,301 @@
+// Contact narrow phase, one thread per slot (CPU reference: crate::contact::narrow and
+// ContactSet::collect_passes / collect_walls): each slot's constraint against its best candidate
+// segment (or its wall), the corner rule, the penalty impulse, and the warm start of the Lagrange
+// multiplier; then the penalty and warm-start impulses gathered per node in a fixed order.
+// Also compiled into the solve module, whose active-set re-check calls the same functions.
+
+@group(0) @binding(13) var<storage, read_write> ws: array<u32>;
+@group(0) @binding(14) var<storage, read_write> grow: array<u32>;
+
+// dt during an active-set re-check (trial positions corrected by dt dv), else 0.
+var<private> corr_dt: f32 = 0.0;
+
+fn x_n(i: u32, j: u32) -> vec2<f32> {
+    return (c_ref[i].xy - c_ref[j].xy) + (pos(i).xy - pos(j).xy);
+}
+
+fn x_tr(i: u32, j: u32) -> vec2<f32> {
+    return (c_ref[i].xy - c_ref[j].xy) + (pos(i).zw - pos(j).zw) + corr_dt * (dv(i) - dv(j));
+}
+
+// Signed distance to the line a -> b of the vector d = p - a along t = b - a.
+fn line_gap(d: vec2<f32>, t: vec2<f32>) -> f32 {
+    let l = length(t);
+    if (l > 0.0) {
+        return dot(d, vec2<f32>(t.y, -t.x) / l);
+    }
+    return 0.0;
+}
+
+fn penalty_impulse(k: f32, g: f32, rate: f32, g_trial: f32, w: f32, dt: f32, dtn: f32) -> f32 {
+    let spring = dtn * k * max(-g, 0.0);
+    var bound = max(-g_trial / w, 0.0);
+    if (rate < 0.0) {
+        bound = -rate * dt / w;
+    }
+    return min(spring, bound);
+}
+
+// A candidate segment of a slave node (crate::contact::narrow::qualify): whether the node is in
+// contact with it, its selection key (larger is better), projection and normal.
+struct Qual {
+    ok: bool,
+    k0: f32,
+    k1: f32,
+    xi: f32,
+    n: vec2<f32>,
+    gap: f32,
+    len: f32,
+}
+
+fn qualify(s: u32, own: vec2<f32>, j: u32, penalty: bool) -> Qual {
+    var r: Qual;
+    r.ok = false;
+    let sg = segs[j];
+    let seg_t = x_n(sg.b, sg.a);
+    if (dot(own, vec2<f32>(seg_t.y, -seg_t.x)) >= 0.0) {
+        return r;
+    }
+    // Projection at the trial positions (Lagrange) or at u_n (penalty).
+    var d = x_tr(s, sg.a);
+    var t = x_tr(sg.b, sg.a);
+    if (penalty) {
+        d = x_n(s, sg.a);
+        t = seg_t;
+    }
+    let l2 = dot(t, t);
+    if (!(l2 > 0.0)) {
+        return r;
+    }
+    let len = sqrt(l2);
+    let xi = dot(d, t) / l2;
+    if (xi < -XI_TOLERANCE || xi > 1.0 + XI_TOLERANCE) {
+        return r;
+    }
+    let n = vec2<f32>(t.y, -t.x) / len;
+    let gap = dot(d, n);
+    if (penalty) {
+        if (!(gap < 0.0 && gap > -0.5 * len)) {
+            return r;
+        }
+        r.k0 = gap;
+        r.k1 = 0.0;
+    } else {
+        let before = line_gap(x_n(s, sg.a), seg_t);
+        if (!(gap < 0.0 && before > -0.5 * len)) {
+            return r;
+        }
+        r.k0 = min(before, 0.0);
+        r.k1 = gap;
+    }
+    r.ok = true;
+    r.xi = clamp(xi, 0.0, 1.0);
+    r.n = n;
+    r.gap = gap;
+    r.len = len;
+    return r;
+}
+
+// Impulse sign on the interface's first body for slot `sl` against segment `sg`.
+fn pass_sign(sl: Slot, sg: Segment) -> f32 {
+    if ((sl.info & SLOT_GROUP) != 0u) {
+        if (sl.body < sg.body) {
+            return 1.0;
+        }
+        if (sl.body > sg.body) {
+            return -1.0;
+        }
+        return 0.0;
+    }
+    return select(1.0, -1.0, (sl.info & SLOT_SECOND) != 0u);
+}
+
+fn no_constraint() -> Cons {
+    var c: Cons;
+    c.kind = KIND_NONE;
+    c.a = NONE;
+    c.b = NONE;
+    c.sign = 0.0;
+    c.xi = 0.0;
+    c.lambda = 0.0;
+    c.pen = 0.0;
+    c.dt_warm = 0.0;
+    return c;
+}
+
+fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
+    var c = no_constraint();
+    let s = sl.s;
+    let penalty = (sl.info & SLOT_PENALTY) != 0u;
+    let t_own = x_n(sl.nn, sl.np);
+    let own = vec2<f32>(t_own.y, -t_own.x);
+    var found = false;
+    var best: Qual;
+    var best_j = 0u;
+    let begin = ws[cp.o_coff + k];
+    let end = ws[cp.o_coff + k + 1u];
+    for (var q = begin; q < end; q++) {
+        let j = grow[q];
+        let r = qualify(s, own, j, penalty);
+        if (r.ok && (!found || r.k0 > best.k0 || (r.k0 == best.k0 && r.k1 > best.k1))) {
+            found = true;
+            best = r;
+            best_j = j;
+        }
+    }
+    if (!found) {
+        return c;
+    }
+    let sg = segs[best_j];
+    var best_xi = best.xi;
+    var best_n = best.n;
+    var best_gap = best.gap;
+    // A tie with the neighbouring segment at a shared master node: contact with that node along
+    // its averaged normal (crate::contact::narrow::vertex).
+    for (var q = begin; q < end; q++) {
+        let j2 = grow[q];
+        let s2 = segs[j2];
+        var m = NONE;
+        if (s2.a == sg.b && s2.b != sg.a) {
+            m = sg.b;
+        } else if (s2.b == sg.a && s2.a != sg.b) {
+            m = sg.a;
+        } else {
+            continue;
+        }
+        let r = qualify(s, own, j2, penalty);
+        if (!r.ok) {
+            continue;
+        }
+        let tol = TIE_TOLERANCE * best.len;
+        if (abs(r.k0 - best.k0) > tol || abs(r.k1 - best.k1) > tol) {
+            continue;
+        }
+        let nsum = best.n + r.n;
+        let l = length(nsum);
+        if (l > 1e-6) {
+            best_n = nsum / l;
+            var d = x_tr(s, m);
+            if (penalty) {
+                d = x_n(s, m);
+            }
+            best_gap = dot(d, best_n);
+            best_xi = select(0.0, 1.0, m == sg.b);
+        }
+        break;
+    }
+    let w = dt * (along(s, best_n, inv_scale)
+        + (1.0 - best_xi) * (1.0 - best_xi) * along(sg.a, best_n, inv_scale)
+        + best_xi * best_xi * along(sg.b, best_n, inv_scale));
+    if (!(w > 0.0)) {
+        return c;
+    }
+    c.a = sg.a;
+    c.b = sg.b;
+    c.sign = pass_sign(sl, sg);
+    c.xi = best_xi;
+    c.n = best_n;
+    c.g0 = best_gap;
+    c.w = w;
+    c.kind = KIND_LAGRANGE;
+    if (penalty) {
+        let vs = vel(s).xy;
+        let rate = dot(vs, best_n)
+            - ((1.0 - best_xi) * dot(vel(sg.a).xy, best_n) + best_xi * dot(vel(sg.b).xy, best_n));
+        let g_trial = best_gap + dt * rate;
+        c.lambda = penalty_impulse(sg.k, best_gap, rate, g_trial, w, dt, dtn);
+        c.pen = -best_gap;
+        c.kind = KIND_PENALTY;
+    }
+    return c;
+}
+
+fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
+    var c = no_constraint();
+    let s = sl.s;
+    let n = sl.normal;
+    let x = (c_ref[s].xy - sl.point) + pos(s).xy;
+    let xt = (c_ref[s].xy - sl.point) + pos(s).zw + corr_dt * dv(s);
+    let g = dot(x, n);
+    let g_tr = dot(xt, n);
+    let w = dt * along(s, n, inv_scale);
+    if (!(w > 0.0)) {
+        return c;
+    }
+    c.n = n;
+    c.g0 = g_tr;
+    c.w = w;
+    c.sign = 1.0;
+    if ((sl.info & SLOT_PENALTY) == 0u) {
+        if (g_tr < 0.0) {
+            c.kind = KIND_LAGRANGE;
+        }
+    } else if (g < 0.0) {
+        let rate = dot(vel(s).xy, n);
+        c.lambda = penalty_impulse(sl.k, g, rate, g_tr, w, dt, dtn);
+        c.pen = -g;
+        c.kind = KIND_PENALTY;
+    }
+    return c;
+}
+
+fn narrow_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
+    let sl = slots[k];
+    if ((sl.info & SLOT_WALL) != 0u) {
+        return narrow_wall(sl, dt, dtn, inv_scale);
+    }
+    return narrow_pass(k, sl, dt, dtn, inv_scale);
+}
+
+// The narrow phase of every slot, with the warm start (as on the CPU): a Lagrange constraint of a
+// slot that carried lambda last step starts from it, scaled by the ratio of the steps.
+@compute @workgroup_size(CG)
+fn narrow(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.x;
+    if (!contact_running() || k >= cp.n_slots) {
+        return;
+    }
+    let dt = ctrl.dt_next;
+    let dtn = ctrl.dt_node;
+    var c = narrow_slot(k, dt, dtn, inv_mass_scale());
+    let old = cons[k];
+    if (c.kind == KIND_LAGRANGE && old.kind == KIND_LAGRANGE && old.lambda > 0.0 && old.dt_warm > 0.0) {
+        c.lambda = old.lambda * (dtn / old.dt_warm);
+    }
+    c.dt_warm = dtn;
+    cons[k] = c;
+    if (c.kind == KIND_LAGRANGE) {
+        atomicAdd(&cc.lagrange, 1u);
+    }
+}
+
+// The velocity change of local node i from the impulses of its slots (penalty and warm start),
+// summed in slot order (its adjacency list is sorted): the same bits on every run.
+@compute @workgroup_size(CG)
+fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (!contact_running() || i >= cp.n_local) {
+        return;
+    }
+    let inv_scale = inv_mass_scale();
+    var d = vec2<f32>(0.0);
+    let b = cp.cand_capacity;
+    let end = ws[cp.o_noff + i + 1u];
+    for (var q = ws[cp.o_noff + i]; q < end; q++) {
+        let k = grow[b + q];
+        let c = cons[k];
+        if (c.kind == KIND_NONE || !(c.lambda > 0.0)) {
+            continue;
+        }
+        var share = 0.0;
+        if (slots[k].s == i) {
+            share = 1.0;
+        } else if (c.a == i) {
+            share = -(1.0 - c.xi);
+        } else if (c.b == i) {
+            share = -c.xi;
+        }
+        d += share * c.lambda * inv_scale * c.n;
+    }
+    c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, d * c_ref[i].zw);
+}

@@ -1,0 +1,206 @@
+// The end of the contact step (CPU reference: the end of crate::contact::ContactSet::apply and its
+// reports): corrected velocities and u_{n+1}, the impulses' work, and per interface the impulse on
+// its first body, the active slaves and the largest penetration. Every sum is a fixed-order
+// reduction (workgroup trees, then one thread over the partials in order): the same bits on every run.
+
+@group(0) @binding(13) var<storage, read_write> ws: array<u32>;
+@group(0) @binding(14) var<storage, read_write> grow: array<u32>;
+
+var<workgroup> sh_f: array<vec4<f32>, CG>;
+
+// 4. Corrected velocities, u_{n+1}, the impulses' work J (v^{n-1/2} + v^{n+1/2}) / 2 (free
+//    directions only: on a constrained one the inverse mass is 0) and kinetic sample sources;
+//    the work per workgroup into fws[f_wp + workgroup].
+@compute @workgroup_size(CG)
+fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>,
+          @builtin(workgroup_id) wid: vec3<u32>) {
+    let i = gid.x;
+    let l = lid.x;
+    if (!running_uniform(l)) {
+        return;
+    }
+    var work = vec4<f32>(0.0);
+    if (i < cp.n_local) {
+        let moving = (ctrl.flags & FLAG_END) == 0u;
+        let sample = (ctrl.flags & FLAG_SAMPLE) != 0u;
+        let dt = ctrl.dt_next;
+        let vl = vel(i);
+        let d = dv(i);
+        let vn = vl.xy + d;
+        c_pv[3u * i + 2u] = vec4<f32>(vn, d);
+        if (d.x != 0.0 || d.y != 0.0) {
+            let g = c_nodes[i].x;
+            let m = bitcast<f32>(c_nodes[i].y);
+            let mu = (1.0 + ctrl.damp_c) * m;
+            let j = vec2<f32>(select(0.0, mu * d.x, c_ref[i].z > 0.0), select(0.0, mu * d.y, c_ref[i].w > 0.0));
+            work = vec4<f32>(0.5 * dot(j, vl.zw + vn), 0.5 * dot(j, vn), 0.0, 0.0);
+            var s = nodes[g];
+            if (moving) {
+                s = vec4<f32>(s.xy + dt * d, vn);
+            } else {
+                s = vec4<f32>(s.xy, vn);
+            }
+            nodes[g] = s;
+            if (sample) {
+                let vq = v_prev[g];
+                sample_src[g] = vec4<f32>(0.5 * m * dot(vq, vn), 0.5 * m * (vq + vn), 0.0);
+            }
+        }
+    }
+    sh_f[l] = work;
+    workgroupBarrier();
+    for (var h = CG / 2u; h > 0u; h >>= 1u) {
+        if (l < h) {
+            sh_f[l] += sh_f[l + h];
+        }
+        workgroupBarrier();
+    }
+    if (l == 0u) {
+        fws[cp.f_wp + wid.x] = sh_f[0];
+    }
+}
+
+fn interface_of(k: u32) -> u32 {
+    return slots[k].info & 0xffffu;
+}
+
+// (impulse on the first body, 1 if active, penetration) of slot k's constraint.
+fn slot_report(k: u32, dt: f32) -> vec4<f32> {
+    let c = cons[k];
+    if (c.kind == KIND_NONE) {
+        return vec4<f32>(0.0);
+    }
+    var r = vec4<f32>(0.0);
+    if (c.lambda > 0.0) {
+        r = vec4<f32>(c.sign * c.lambda * c.n, 1.0, 0.0);
+    }
+    if (c.kind == KIND_PENALTY) {
+        r.w = max(c.pen, 0.0);
+    } else {
+        r.w = max(-(c.g0 + dt * relative(c, slots[k].s)), 0.0);
+    }
+    return r;
+}
+
+// 5a. Per chunk of CG slots, one partial per run of slots of one interface, at the run's first
+//     slot: fws[f_rp + k] = (impulse, active, largest penetration), summed in slot order.
+@compute @workgroup_size(CG)
+fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
+    let k = gid.x;
+    let l = lid.x;
+    if (!running_uniform(l)) {
+        return;
+    }
+    let dt = ctrl.dt_next;
+    if (k < cp.n_slots) {
+        sh_f[l] = slot_report(k, dt);
+    }
+    workgroupBarrier();
+    if (l != 0u) {
+        return;
+    }
+    let n = min(CG, cp.n_slots - min(k, cp.n_slots));
+    var start = k;
+    var acc = vec4<f32>(0.0);
+    var f = NONE;
+    for (var q = 0u; q < n; q++) {
+        let fq = interface_of(k + q);
+        if (fq != f) {
+            if (f != NONE) {
+                fws[cp.f_rp + start] = acc;
+            }
+            f = fq;
+            start = k + q;
+            acc = vec4<f32>(0.0);
+        }
+        let r = sh_f[q];
+        acc = vec4<f32>(acc.xyz + r.xyz, max(acc.w, r.w));
+    }
+    if (f != NONE) {
+        fws[cp.f_rp + start] = acc;
+    }
+}
+
+fn acc_get(f: u32) -> vec4<f32> {
+    let b = cp.row_capacity * cp.hist_stride + 4u * f;
+    return vec4<f32>(c_hist[b], c_hist[b + 1u], c_hist[b + 2u], c_hist[b + 3u]);
+}
+
+fn acc_set(f: u32, a: vec4<f32>) {
+    let b = cp.row_capacity * cp.hist_stride + 4u * f;
+    c_hist[b] = a.x;
+    c_hist[b + 1u] = a.y;
+    c_hist[b + 2u] = a.z;
+    c_hist[b + 3u] = a.w;
+}
+
+// 5b. Per interface (its slots are contiguous: ws[o_iface + f] .. ws[o_iface + f + 1]), the
+//     partials of its runs in order; the history row on sample steps; the work; sweep counts.
+@compute @workgroup_size(CG)
+fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
+    let l = lid.x;
+    if (!running_uniform(l)) {
+        return;
+    }
+    let sample = (ctrl.flags & FLAG_SAMPLE) != 0u;
+    let dtn = ctrl.dt_node;
+    let row = (ctrl.rows % cp.row_capacity) * cp.hist_stride;
+    for (var f = l; f < cp.n_ifaces; f += CG) {
+        let lo = ws[cp.o_iface + f];
+        let hi = ws[cp.o_iface + f + 1u];
+        var r = vec4<f32>(0.0);
+        var at = lo;
+        while (at < hi) {
+            let p = fws[cp.f_rp + at];
+            r = vec4<f32>(r.xyz + p.xyz, max(r.w, p.w));
+            at = (at / CG + 1u) * CG;
+        }
+        var a = acc_get(f);
+        a += vec4<f32>(r.xy, dtn, 0.0);
+        if (sample) {
+            var force = vec2<f32>(0.0);
+            if (a.z > 0.0) {
+                force = a.xy / a.z;
+            }
+            c_hist[row + 1u + 4u * f] = force.x;
+            c_hist[row + 2u + 4u * f] = force.y;
+            c_hist[row + 3u + 4u * f] = r.w;
+            c_hist[row + 4u + 4u * f] = r.z;
+            a = vec4<f32>(0.0);
+        }
+        acc_set(f, a);
+    }
+    if (l != 0u) {
+        return;
+    }
+    var total = vec4<f32>(0.0);
+    let ng = (cp.n_local + CG - 1u) / CG;
+    for (var g = 0u; g < ng; g++) {
+        total += fws[cp.f_wp + g];
+    }
+    var w = acc_get(cp.n_ifaces);
+    w.x += total.x;
+    w.y = total.y;
+    acc_set(cp.n_ifaces, w);
+    if (sample) {
+        c_hist[row] = -(w.x - w.y);
+    }
+    // Sweeps of this step (per-colour path: the sweeps that ran).
+    if (atomicLoad(&cc.lagrange) > 0u) {
+        var s = cc.sweeps;
+        if (cp.multi != 0u) {
+            s = 0u;
+            for (var q = 0u; q < MAX_SWEEP_SLOTS; q++) {
+                s += select(0u, 1u, atomicLoad(&cc.change[q]) != 0u);
+            }
+            let last = atomicLoad(&cc.change[cp.max_sweeps - 1u]);
+            if (last != 0u && bitcast<f32>(last) > cp.tolerance) {
+                cc.unconverged += 1u;
+            }
+        }
+        cc.sweeps = s;
+        cc.sweeps_total += s;
+        cc.sweeps_max = max(cc.sweeps_max, s);
+        cc.solve_steps += 1u;
+    }
+}

@@ -1,0 +1,569 @@
+// Contact search on the device (CPU reference: crate::contact broad phase, parry's BVH): the
+// positions of the step, whether a search is due (a contact node moved more than half the margin
+// since the last one), and when it is, candidate (slot, segment) pairs from a hashed uniform grid
+// over the swept segment boxes, then a colouring of the slots (slots of one colour share no node
+// through any candidate) by Jones-Plassmann rounds with hashed priorities.
+//
+// Deterministic: counts by integer atomics, offsets by fixed-order scans; a slot's candidates are
+// sorted by segment index, and the node adjacency lists by slot index, so no result depends on
+// the order in which threads ran. The colouring depends only on neighbour sets and priorities.
+// Every search kernel is dispatched indirectly: `plan` writes zero sizes when no search is due.
+// A search whose candidates exceed the buffer stops the step (STATE_SEARCH_GROW) before anything
+// changed; the host grows the buffer and resumes the step (never a silent truncation).
+
+@group(0) @binding(13) var<storage, read_write> ws: array<atomic<u32>>;
+@group(0) @binding(14) var<storage, read_write> grow: array<atomic<u32>>;
+@group(1) @binding(0) var<storage, read_write> ind: array<u32>;
+
+var<workgroup> sh_scan: array<u32, SG>;
+var<workgroup> sh_u: u32;
+
+fn wsl(i: u32) -> u32 {
+    return atomicLoad(&ws[i]);
+}
+
+fn wss(i: u32, v: u32) {
+    atomicStore(&ws[i], v);
+}
+
+// 1. Positions u_n and u_n + dt v of the free update, v^{n-1/2}, dv = 0, and whether a search is due.
+@compute @workgroup_size(CG)
+fn prep(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (!contact_running() || i >= cp.n_local) {
+        return;
+    }
+    let dt = ctrl.dt_next;
+    let moving = (ctrl.flags & FLAG_END) == 0u;
+    let s = nodes[c_nodes[i].x];
+    let v = s.zw;
+    var un = s.xy;
+    var ut = s.xy;
+    if (moving) {
+        un = s.xy - dt * v;
+    } else {
+        ut = s.xy + dt * v;
+    }
+    c_pv[3u * i] = vec4<f32>(un, ut);
+    var vo = c_pv[3u * i + 2u].xy;
+    if (ctrl.step == 0u) {
+        vo = 2.0 * vo - v;
+    }
+    c_pv[3u * i + 1u] = vec4<f32>(v, vo);
+    c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, 0.0, 0.0);
+    let r = fws[cp.f_usearch + i].xy;
+    let d0 = un - r;
+    let d1 = ut - r;
+    let h2 = 0.25 * cp.margin * cp.margin;
+    if (cc.searches == 0u || dot(d0, d0) > h2 || dot(d1, d1) > h2) {
+        atomicOr(&cc.due, 1u);
+    }
+}
+
+fn groups(n: u32) -> u32 {
+    return (n + CG - 1u) / CG;
+}
+
+fn set_ind(k: u32, n: u32) {
+    ind[3u * k] = n;
+    ind[3u * k + 1u] = 1u;
+    ind[3u * k + 2u] = 1u;
+}
+
+// Indirect sizes of the search kernels: their sizes when a search is due, else zero. Per-step
+// counters reset here.
+@compute @workgroup_size(1)
+fn plan() {
+    if (!contact_running()) {
+        return;
+    }
+    let due = atomicExchange(&cc.due, 0u) != 0u;
+    let f = select(0u, 1u, due);
+    set_ind(0u, f * groups(max(max(cp.n_segs, cp.n_buckets), max(cp.n_local, cp.n_slots))));
+    set_ind(1u, f * groups(cp.n_segs));
+    set_ind(2u, f);
+    set_ind(3u, f * groups(cp.n_segs));
+    set_ind(4u, f * groups(cp.n_slots));
+    set_ind(5u, f);
+    set_ind(6u, f * groups(cp.n_slots));
+    set_ind(7u, f * groups(cp.n_slots));
+    set_ind(8u, f);
+    set_ind(9u, f * groups(cp.n_slots));
+    set_ind(10u, f * groups(cp.n_local));
+    set_ind(11u, f * groups(cp.n_slots));
+    set_ind(12u, f * groups(cp.n_slots));
+    set_ind(13u, f * groups(cp.n_slots));
+    atomicStore(&cc.searching, f);
+    if (due) {
+        cc.searches += 1u;
+        atomicStore(&cc.extent, 0u);
+        atomicStore(&cc.n_colors, 0u);
+    }
+    atomicStore(&cc.lagrange, 0u);
+    atomicStore(&cc.new_cons, 0u);
+    cc.sweeps = 0u;
+    for (var q = 0u; q < MAX_SWEEP_SLOTS; q++) {
+        atomicStore(&cc.change[q], 0u);
+    }
+    for (var r = 0u; r < 4u; r++) {
+        atomicStore(&cc.added[r], 0u);
+    }
+}
+
+fn node_x(i: u32) -> vec2<f32> {
+    return c_ref[i].xy + pos(i).xy;
+}
+
+fn node_xt(i: u32) -> vec2<f32> {
+    return c_ref[i].xy + pos(i).zw;
+}
+
+// Padding for f32 rounding on top of a box (as the CPU broad phase pads parry's f32 boxes).
+fn pad(x: vec2<f32>) -> vec2<f32> {
+    return 1e-6 * abs(x) + vec2<f32>(1e-30);
+}
+
+fn cell_size() -> f32 {
+    return max(bitcast<f32>(atomicLoad(&cc.extent)), 1e-30);
+}
+
+fn cell_of(x: vec2<f32>, h: f32) -> vec2<i32> {
+    return vec2<i32>(floor(x / h));
+}
+
+fn bucket(c: vec2<i32>) -> u32 {
+    let u = bitcast<vec2<u32>>(c);
+    return ((u.x * 73856093u) ^ (u.y * 19349663u)) & (cp.n_buckets - 1u);
+}
+
+// 2a. Swept boxes of the segments (u_n and the trial u_{n+1}) inflated by the margin, and the
+// largest side (the cell size); clears the counts; keeps u at the search.
+@compute @workgroup_size(CG)
+fn boxes(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (!contact_running()) {
+        return;
+    }
+    if (i < cp.n_segs) {
+        let sg = segs[i];
+        let lo = min(min(node_x(sg.a), node_x(sg.b)), min(node_xt(sg.a), node_xt(sg.b)));
+        let hi = max(max(node_x(sg.a), node_x(sg.b)), max(node_xt(sg.a), node_xt(sg.b)));
+        let l = lo - cp.margin - pad(lo);
+        let h = hi + cp.margin + pad(hi);
+        fws[cp.f_box + i] = vec4<f32>(l, h);
+        let e = max(h.x - l.x, h.y - l.y);
+        atomicMax(&cc.extent, bitcast<u32>(e));
+    }
+    if (i < cp.n_buckets) {
+        wss(cp.o_bcount + i, 0u);
+    }
+    if (i < cp.n_local) {
+        wss(cp.o_ncount + i, 0u);
+        fws[cp.f_usearch + i] = vec4<f32>(pos(i).zw, 0.0, 0.0);
+    }
+    if (i < cp.n_slots) {
+        wss(cp.o_color + i, NONE);
+    }
+    if (i <= MAX_COLORS) {
+        wss(cp.o_lcount + i, 0u);
+    }
+}
+
+// The distinct buckets of a segment's cells (at most 2 x 2: the cell is the largest box side).
+fn seg_buckets(j: u32, out: ptr<function, array<u32, 4>>) -> u32 {
+    let b = fws[cp.f_box + j];
+    let h = cell_size();
+    let c0 = cell_of(b.xy, h);
+    let c1 = cell_of(b.zw, h);
+    var n = 0u;
+    for (var y = c0.y; y <= c1.y && y <= c0.y + 1; y++) {
+        for (var x = c0.x; x <= c1.x && x <= c0.x + 1; x++) {
+            let k = bucket(vec2<i32>(x, y));
+            var seen = false;
+            for (var m = 0u; m < n; m++) {
+                seen = seen || (*out)[m] == k;
+            }
+            if (!seen) {
+                (*out)[n] = k;
+                n++;
+            }
+        }
+    }
+    return n;
+}
+
+// 2b. Segments per bucket.
+@compute @workgroup_size(CG)
+fn seg_count(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let j = gid.x;
+    if (!contact_running() || j >= cp.n_segs) {
+        return;
+    }
+    var bs: array<u32, 4>;
+    let n = seg_buckets(j, &bs);
+    for (var m = 0u; m < n; m++) {
+        atomicAdd(&ws[cp.o_bcount + bs[m]], 1u);
+    }
+}
+
+// Exclusive scan of n words at `src` into `dst` (n + 1 words) and a copy at `cur` (if not NONE),
+// in one workgroup, in a fixed order; returns the total.
+fn scan(src: u32, dst: u32, cur: u32, n: u32, l: u32) -> u32 {
+    let per = (n + SG - 1u) / SG;
+    let begin = min(l * per, n);
+    let end = min(begin + per, n);
+    var sum = 0u;
+    for (var i = begin; i < end; i++) {
+        sum += wsl(src + i);
+    }
+    sh_scan[l] = sum;
+    workgroupBarrier();
+    if (l == 0u) {
+        var acc = 0u;
+        for (var t = 0u; t < SG; t++) {
+            let x = sh_scan[t];
+            sh_scan[t] = acc;
+            acc += x;
+        }
+        sh_u = acc;
+    }
+    workgroupBarrier();
+    var acc = sh_scan[l];
+    for (var i = begin; i < end; i++) {
+        let x = wsl(src + i);
+        wss(dst + i, acc);
+        if (cur != NONE) {
+            wss(cur + i, acc);
+        }
+        acc += x;
+    }
+    let total = workgroupUniformLoad(&sh_u);
+    if (l == 0u) {
+        wss(dst + n, total);
+    }
+    return total;
+}
+
+@compute @workgroup_size(SG)
+fn scan_buckets(@builtin(local_invocation_id) lid: vec3<u32>) {
+    if (!running_uniform(lid.x)) {
+        return;
+    }
+    scan(cp.o_bcount, cp.o_boff, cp.o_bcur, cp.n_buckets, lid.x);
+}
+
+// 2c. Bucket entries (in any order: the slots sort their candidates).
+@compute @workgroup_size(CG)
+fn seg_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let j = gid.x;
+    if (!contact_running() || j >= cp.n_segs) {
+        return;
+    }
+    var bs: array<u32, 4>;
+    let n = seg_buckets(j, &bs);
+    for (var m = 0u; m < n; m++) {
+        let at = atomicAdd(&ws[cp.o_bcur + bs[m]], 1u);
+        wss(cp.o_bent + at, j);
+    }
+}
+
+// Whether master segment j may be paired with slot k (crate::contact::narrow::admissible, with
+// the pass): the slot's pass; not a segment of the slave's own; another body, or self-contact
+// without the neighbouring segments and without the segments the slave lies behind in the
+// reference configuration (the far side of the same body).
+fn admissible(sl: Slot, sg: Segment) -> bool {
+    if (sg.pass_id != sl.pass_id || sg.a == sl.s || sg.b == sl.s) {
+        return false;
+    }
+    if (sg.body != sl.body) {
+        return true;
+    }
+    if ((sl.info & SLOT_SELF) == 0u) {
+        return false;
+    }
+    if (sg.a == sl.np || sg.a == sl.nn || sg.b == sl.np || sg.b == sl.nn) {
+        return false;
+    }
+    let xa = c_ref[sg.a].xy;
+    let t = c_ref[sg.b].xy - xa;
+    let d = c_ref[sl.s].xy - xa;
+    let l2 = dot(t, t);
+    if (!(l2 > 0.0)) {
+        return false;
+    }
+    let xi = dot(d, t) / l2;
+    let gap = dot(d, vec2<f32>(t.y, -t.x));
+    return !(xi >= 0.0 && xi <= 1.0 && gap < 0.0);
+}
+
+// Visits slot k's candidates: mode 0 counts them, mode 1 writes them from `at` and sorts them.
+fn visit(k: u32, mode: u32, at: u32) -> u32 {
+    let sl = slots[k];
+    if ((sl.info & SLOT_WALL) != 0u) {
+        return 0u;
+    }
+    let a = node_x(sl.s);
+    let b = node_xt(sl.s);
+    let lo = min(a, b) - pad(min(a, b));
+    let hi = max(a, b) + pad(max(a, b));
+    let h = cell_size();
+    let c0 = cell_of(lo, h);
+    let c1 = cell_of(hi, h);
+    var n = 0u;
+    for (var y = c0.y; y <= c1.y; y++) {
+        for (var x = c0.x; x <= c1.x; x++) {
+            let bk = bucket(vec2<i32>(x, y));
+            let end = wsl(cp.o_boff + bk + 1u);
+            for (var e = wsl(cp.o_boff + bk); e < end; e++) {
+                let j = wsl(cp.o_bent + e);
+                let bx = fws[cp.f_box + j];
+                // Overlap, counted once: at the lowest cell common to both boxes.
+                if (any(bx.xy > hi) || any(bx.zw < lo)) {
+                    continue;
+                }
+                let s0 = cell_of(bx.xy, h);
+                let first = max(c0, s0);
+                if (first.x != x || first.y != y) {
+                    continue;
+                }
+                if (!admissible(sl, segs[j])) {
+                    continue;
+                }
+                if (mode == 1u) {
+                    // Insertion in ascending segment order.
+                    var p = n;
+                    while (p > 0u && atomicLoad(&grow[at + p - 1u]) > j) {
+                        atomicStore(&grow[at + p], atomicLoad(&grow[at + p - 1u]));
+                        p--;
+                    }
+                    atomicStore(&grow[at + p], j);
+                }
+                n++;
+            }
+        }
+    }
+    return n;
+}
+
+// 2d. Candidates per slot.
+@compute @workgroup_size(CG)
+fn slot_count(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.x;
+    if (!contact_running() || k >= cp.n_slots) {
+        return;
+    }
+    wss(cp.o_ccount + k, visit(k, 0u, 0u));
+}
+
+// 2e. Candidate offsets; a search that does not fit stops the step for the host to grow the buffer.
+@compute @workgroup_size(SG)
+fn scan_slots(@builtin(local_invocation_id) lid: vec3<u32>) {
+    let l = lid.x;
+    if (!running_uniform(l)) {
+        return;
+    }
+    let total = scan(cp.o_ccount, cp.o_coff, NONE, cp.n_slots, l);
+    if (l == 0u) {
+        atomicStore(&cc.n_cand, total);
+        // The node adjacency: each slot's slave and its candidates' nodes.
+        if (total > cp.cand_capacity || cp.n_slots + 2u * total > cp.adj_capacity) {
+            cc.need_cand = total;
+            atomicOr(&cc.grow, GROW_CANDIDATES);
+            ctrl.state = STATE_SEARCH_GROW;
+        }
+    }
+}
+
+// 2f. The candidates, sorted per slot.
+@compute @workgroup_size(CG)
+fn slot_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.x;
+    if (!contact_running() || k >= cp.n_slots) {
+        return;
+    }
+    visit(k, 1u, wsl(cp.o_coff + k));
+}
+
+// The nodes a slot can touch: its slave, then its candidates' nodes (a node may repeat).
+fn touched(k: u32, m: u32) -> u32 {
+    if (m == 0u) {
+        return slots[k].s;
+    }
+    let j = atomicLoad(&grow[wsl(cp.o_coff + k) + (m - 1u) / 2u]);
+    let sg = segs[j];
+    return select(sg.b, sg.a, (m & 1u) == 1u);
+}
+
+fn n_touched(k: u32) -> u32 {
+    return 1u + 2u * (wsl(cp.o_coff + k + 1u) - wsl(cp.o_coff + k));
+}
+
+// Whether the m-th touched node of slot k already appeared before it.
+fn repeated(k: u32, m: u32, i: u32) -> bool {
+    for (var q = 0u; q < m; q++) {
+        if (touched(k, q) == i) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// 3a. Slots per node.
+@compute @workgroup_size(CG)
+fn adj_count(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.x;
+    if (!contact_running() || k >= cp.n_slots) {
+        return;
+    }
+    let nt = n_touched(k);
+    for (var m = 0u; m < nt; m++) {
+        let i = touched(k, m);
+        if (!repeated(k, m, i)) {
+            atomicAdd(&ws[cp.o_ncount + i], 1u);
+        }
+    }
+}
+
+@compute @workgroup_size(SG)
+fn scan_nodes(@builtin(local_invocation_id) lid: vec3<u32>) {
+    if (!running_uniform(lid.x)) {
+        return;
+    }
+    let total = scan(cp.o_ncount, cp.o_noff, cp.o_ncur, cp.n_local, lid.x);
+    if (lid.x == 0u) {
+        cc.n_adj = total;
+    }
+}
+
+// 3b. Node adjacency entries (sorted per node next).
+@compute @workgroup_size(CG)
+fn adj_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.x;
+    if (!contact_running() || k >= cp.n_slots) {
+        return;
+    }
+    let nt = n_touched(k);
+    for (var m = 0u; m < nt; m++) {
+        let i = touched(k, m);
+        if (!repeated(k, m, i)) {
+            let at = atomicAdd(&ws[cp.o_ncur + i], 1u);
+            atomicStore(&grow[cp.cand_capacity + at], k);
+        }
+    }
+}
+
+@compute @workgroup_size(CG)
+fn adj_sort(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (!contact_running() || i >= cp.n_local) {
+        return;
+    }
+    let b = cp.cand_capacity + wsl(cp.o_noff + i);
+    let n = wsl(cp.o_noff + i + 1u) - wsl(cp.o_noff + i);
+    for (var p = 1u; p < n; p++) {
+        let x = atomicLoad(&grow[b + p]);
+        var q = p;
+        while (q > 0u && atomicLoad(&grow[b + q - 1u]) > x) {
+            atomicStore(&grow[b + q], atomicLoad(&grow[b + q - 1u]));
+            q--;
+        }
+        atomicStore(&grow[b + q], x);
+    }
+}
+
+fn priority(k: u32) -> u32 {
+    var x = k * 747796405u + 2891336453u;
+    x = ((x >> ((x >> 28u) + 4u)) ^ x) * 277803737u;
+    return (x >> 22u) ^ x;
+}
+
+fn outranks(j: u32, k: u32) -> bool {
+    let pj = priority(j);
+    let pk = priority(k);
+    return pj > pk || (pj == pk && j > k);
+}
+
+// 3c. Colouring round r (Jones-Plassmann): an uncoloured slot that outranks every neighbour still
+// uncoloured at the start of the round takes colour r. A neighbour coloured in this round reads
+// as r, i.e. still uncoloured at the start: the outcome does not depend on thread order.
+fn jp_round(k: u32, r: u32) {
+    if (wsl(cp.o_color + k) != NONE) {
+        return;
+    }
+    let nt = n_touched(k);
+    for (var m = 0u; m < nt; m++) {
+        let i = touched(k, m);
+        let b = cp.cand_capacity + wsl(cp.o_noff + i);
+        let n = wsl(cp.o_noff + i + 1u) - wsl(cp.o_noff + i);
+        for (var q = 0u; q < n; q++) {
+            let j = atomicLoad(&grow[b + q]);
+            if (j != k && wsl(cp.o_color + j) >= r && outranks(j, k)) {
+                return;
+            }
+        }
+    }
+    wss(cp.o_color + k, r);
+    atomicMax(&cc.n_colors, r + 1u);
+}
+
+// One round per dispatch; the round's index is the dynamic offset of `round_index`.
+@compute @workgroup_size(CG)
+fn color_round(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.x;
+    if (!contact_running() || k >= cp.n_slots) {
+        return;
+    }
+    jp_round(k, round_index.x);
+}
+
+// 3d. Slots per colour; a slot left uncoloured after the recorded rounds stops the step.
+@compute @workgroup_size(CG)
+fn list_count(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.x;
+    if (!contact_running() || k >= cp.n_slots) {
+        return;
+    }
+    let c = wsl(cp.o_color + k);
+    if (c == NONE) {
+        atomicOr(&cc.grow, GROW_ROUNDS);
+    } else {
+        atomicAdd(&ws[cp.o_lcount + c], 1u);
+    }
+}
+
+// Colour offsets and the per-colour dispatch sizes (indirect entries 14 + c); a direct dispatch
+// (it writes the indirect sizes), idle when no search ran this step.
+@compute @workgroup_size(SG)
+fn scan_lists(@builtin(local_invocation_id) lid: vec3<u32>) {
+    let l = lid.x;
+    if (l == 0u) {
+        sh_u = select(0u, 1u, contact_running() && atomicLoad(&cc.searching) != 0u);
+    }
+    if (workgroupUniformLoad(&sh_u) == 0u) {
+        return;
+    }
+    scan(cp.o_lcount, cp.o_loff, cp.o_lcur, MAX_COLORS, l);
+    if (l == 0u) {
+        let nc = atomicLoad(&cc.n_colors);
+        if (atomicLoad(&cc.grow) != 0u || (cp.multi != 0u && nc > cp.colors_recorded)) {
+            if (cp.multi != 0u && nc > cp.colors_recorded) {
+                atomicOr(&cc.grow, GROW_COLORS);
+            }
+            ctrl.state = STATE_SEARCH_GROW;
+        }
+        for (var c = 0u; c < MAX_COLORS; c++) {
+            set_ind(14u + c, groups(wsl(cp.o_lcount + c)));
+        }
+    }
+}
+
+@compute @workgroup_size(CG)
+fn list_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.x;
+    if (!contact_running() || k >= cp.n_slots) {
+        return;
+    }
+    let c = wsl(cp.o_color + k);
+    let at = atomicAdd(&ws[cp.o_lcur + c], 1u);
+    wss(cp.o_list + at, k);
+}

@@ -1,0 +1,23 @@
+//! The diagonal-mass Lagrange correction on the device (`shaders/contact_solve.wgsl`): projected
+//! Gauss-Seidel over the colours of the last search and the active-set update, either in one
+//! workgroup (`solve_one`) or one dispatch per colour and sweep (`sweep_color`, `recheck`). CPU
+//! reference: the sweeps and re-check of [`crate::contact::ContactSet::apply`].
+
+/// WGSL source (compiled after [`super::narrow::SOURCE`]).
+pub const SOURCE: &str = include_str!("../../../shaders/contact_solve.wgsl");
+
+/// Sweeps per solve at most on the device (one-workgroup path), as on the CPU.
+pub const MAX_SWEEPS: u32 = crate::contact::MAX_SWEEPS as u32;
+
+/// Sweeps per round at most on the per-colour path (each sweep is one dispatch per colour, so
+/// they are recorded ahead; WGSL `MAX_SWEEP_SLOTS` = 5 rounds of these).
+pub const MULTI_SWEEPS: u32 = 16;
+
+/// A sweep converges when no gap changes by more than this fraction of the search margin. The
+/// margin is half the shortest segment, and f32 resolves relative coordinates to about 1e-7 of
+/// an element, so this is about 50 f32 units of a gap: reachable, and 1e-5 of half an element.
+pub const TOLERANCE: f64 = 1e-5;
+
+/// Slots from which the per-colour path is used on a discrete or integrated GPU. On CPU adapters
+/// (lavapipe) a dispatch costs more than a colour's work, and the one-workgroup path is used.
+pub const MULTI_SLOTS: usize = 4096;
