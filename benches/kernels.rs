@@ -11,7 +11,7 @@ fn cpu_step(c: &mut Criterion) {
     let mut group = c.benchmark_group("cpu_step");
     for cells in [32usize, 100] {
         let scene = ricochet::bench::scene(cells).expect("bench scene");
-        let model = Model::build(&scene).expect("model");
+        let model = ricochet::run::model(&scene).expect("model");
         let plan = Plan::new(&scene, &model);
         let ne = model.element_count() as u64;
         let mut solver = CpuSolver::new(model, plan, ricochet::run::schedule(&scene));
@@ -33,7 +33,7 @@ fn gpu_steps(c: &mut Criterion) {
     group.sample_size(10);
     for cells in [32usize, 100] {
         let scene = ricochet::bench::scene(cells).expect("bench scene");
-        let model = Model::build(&scene).expect("model");
+        let model = ricochet::run::model(&scene).expect("model");
         let plan = Plan::new(&scene, &model);
         let ne = model.element_count() as u64;
         let mut solver = ricochet::gpu::GpuSolver::new(

@@ -153,10 +153,10 @@ impl ContactState {
         let segs: Vec<GpuSegment> = t
             .segments
             .iter()
-            .map(|(ab, k)| GpuSegment {
-                a: ab[0],
-                b: ab[1],
-                k: *k as f32,
+            .map(|seg| GpuSegment {
+                a: seg.nodes[0],
+                b: seg.nodes[1],
+                k: seg.stiffness as f32,
                 _pad: 0,
             })
             .collect();
