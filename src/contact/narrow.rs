@@ -397,6 +397,73 @@ mod tests {
     }
 
     #[test]
+    fn admissible_pairs_follow_bodies_neighbours_and_the_far_side() {
+        // Segment a=10 -> b=11 along +x (outward normal -y: its body lies above it).
+        let (xa, xb) = ([0.0, 0.0], [1.0, 0.0]);
+        let front = [0.5, -0.1];
+        let behind = [0.5, 0.1];
+        // Never the node's own segment.
+        assert!(!admissible(10, [9, 11], 0, [10, 11], 1, true, xa, xa, xb));
+        assert!(!admissible(11, [10, 12], 0, [10, 11], 1, true, xb, xa, xb));
+        // Another body: always, behind or not.
+        assert!(admissible(1, [0, 2], 0, [10, 11], 1, false, behind, xa, xb));
+        assert!(admissible(1, [0, 2], 1, [10, 11], 0, false, front, xa, xb));
+        // The same body: only with self-contact ...
+        assert!(!admissible(1, [0, 2], 3, [10, 11], 3, false, front, xa, xb));
+        assert!(admissible(1, [0, 2], 3, [10, 11], 3, true, front, xa, xb));
+        // ... never next to the node ...
+        assert!(!admissible(1, [10, 2], 3, [10, 11], 3, true, front, xa, xb));
+        assert!(!admissible(1, [0, 11], 3, [10, 11], 3, true, front, xa, xb));
+        // ... never the far side (projects onto the segment and lies behind it) ...
+        assert!(!admissible(1, [0, 2], 3, [10, 11], 3, true, behind, xa, xb));
+        assert!(!admissible(
+            1,
+            [0, 2],
+            3,
+            [10, 11],
+            3,
+            true,
+            [1.0, 0.1],
+            xa,
+            xb
+        ));
+        // ... but behind the segment's line beyond its ends, or on it, is admissible.
+        assert!(admissible(
+            1,
+            [0, 2],
+            3,
+            [10, 11],
+            3,
+            true,
+            [1.5, 0.1],
+            xa,
+            xb
+        ));
+        assert!(admissible(
+            1,
+            [0, 2],
+            3,
+            [10, 11],
+            3,
+            true,
+            [-0.5, 0.1],
+            xa,
+            xb
+        ));
+        assert!(admissible(
+            1,
+            [0, 2],
+            3,
+            [10, 11],
+            3,
+            true,
+            [0.5, 0.0],
+            xa,
+            xb
+        ));
+    }
+
+    #[test]
     fn keys_tie_within_the_tolerance_of_the_segment_length() {
         assert!(ties((0.0, -1e-3), (0.0, -1e-3 + 0.9e-4), 1.0));
         assert!(!ties((0.0, -1e-3), (0.0, -1e-3 + 1.1e-4), 1.0));
