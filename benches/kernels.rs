@@ -3,7 +3,6 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 
-use ricochet::model::Model;
 use ricochet::plan::Plan;
 use ricochet::step::cpu::CpuSolver;
 

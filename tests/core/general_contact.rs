@@ -8,9 +8,7 @@ use ricochet::step::cpu::CpuSolver;
 
 use crate::common::*;
 
-#[path = "../shared/penetration.rs"]
-mod penetration;
-use penetration::{interpenetration, self_penetration};
+use crate::stress::penetration::{interpenetration, self_penetration};
 
 fn asset(name: &str) -> String {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
