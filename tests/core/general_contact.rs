@@ -320,3 +320,31 @@ fn a_ring_pressed_onto_itself_stays_out_of_its_own_surface_with_self_contact_onl
     // Measured: 3.9e-4 m (a node is at most h / 2 = 1e-3 m from the sides of an element it is in).
     assert!(through > 0.1 * t, "{through:e}");
 }
+
+#[test]
+fn bodies_overlapping_at_t0_in_a_group_are_moved_apart_and_stay_at_rest() {
+    for method in ["lagrange", "penalty"] {
+        let text = crate::contact::overlapping_blocks(2e-5, method)
+            .replace("bodies = [\"upper\", \"lower\"]", "bodies = \"all\"");
+        let (_, model, _) = build(&text);
+        let moved = &model.initial_overlaps;
+        let worst = moved.iter().map(|o| o.depth).fold(0.0, f64::max);
+        assert!(moved.iter().any(|o| o.interface == "all"), "group overlaps");
+        assert!((worst - 2e-5).abs() < 1e-12, "{worst:e}");
+        let mut again = ContactSet::new(&model).expect("contact");
+        assert!(again.initial_overlaps(&model).is_empty(), "overlaps left");
+        let (r, _, _) = run_cpu(&text, "group-overlap");
+        let mut peak: f64 = 0.0;
+        for (s, _) in &r.samples {
+            peak = peak.max(s.kinetic.abs() + s.internal.abs() + s.hourglass.abs());
+            for c in &s.contacts {
+                peak = peak.max(c.max_penetration);
+            }
+        }
+        println!(
+            "group overlap ({method}): {} nodes moved; largest energy or penetration {peak:.2e}",
+            moved.len()
+        );
+        assert!(peak < 1e-12, "{method}: the bodies moved: {peak:e}");
+    }
+}
