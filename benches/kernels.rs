@@ -3,7 +3,6 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 
-use ricochet::model::Model;
 use ricochet::plan::Plan;
 use ricochet::step::cpu::CpuSolver;
 
@@ -11,7 +10,7 @@ fn cpu_step(c: &mut Criterion) {
     let mut group = c.benchmark_group("cpu_step");
     for cells in [32usize, 100] {
         let scene = ricochet::bench::scene(cells).expect("bench scene");
-        let model = Model::build(&scene).expect("model");
+        let model = ricochet::run::model(&scene).expect("model");
         let plan = Plan::new(&scene, &model);
         let ne = model.element_count() as u64;
         let mut solver = CpuSolver::new(model, plan, ricochet::run::schedule(&scene));
@@ -33,7 +32,7 @@ fn gpu_steps(c: &mut Criterion) {
     group.sample_size(10);
     for cells in [32usize, 100] {
         let scene = ricochet::bench::scene(cells).expect("bench scene");
-        let model = Model::build(&scene).expect("model");
+        let model = ricochet::run::model(&scene).expect("model");
         let plan = Plan::new(&scene, &model);
         let ne = model.element_count() as u64;
         let mut solver = ricochet::gpu::GpuSolver::new(

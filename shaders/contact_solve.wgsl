@@ -12,8 +12,28 @@
 const ACTIVE_SET_ROUNDS: u32 = 4u;    // crate::contact::ACTIVE_SET_ROUNDS
 
 var<workgroup> sh_m: array<f32, SG>;
-var<workgroup> sh_n: atomic<u32>;
 var<workgroup> sh_w: u32;
+var<workgroup> sh_nc: u32;
+
+// Whether any invocation's `x` is positive, as a workgroup-uniform value: a tree over sh_m with
+// barriers, written by invocation 0 into a plain workgroup word. (Every exit of the solve loops
+// is decided this way, never by a uniform load of a workgroup atomic: with the old single kernel
+// on lavapipe the invocations disagreed about such a load, left the loops at different barriers,
+// and the step lost its contact impulses.)
+fn any_positive(l: u32, x: f32) -> bool {
+    sh_m[l] = x;
+    workgroupBarrier();
+    for (var h = SG / 2u; h > 0u; h >>= 1u) {
+        if (l < h) {
+            sh_m[l] = max(sh_m[l], sh_m[l + h]);
+        }
+        workgroupBarrier();
+    }
+    if (l == 0u) {
+        sh_w = select(0u, 1u, sh_m[0] > 0.0);
+    }
+    return workgroupUniformLoad(&sh_w) != 0u;
+}
 
 fn list_begin(c: u32) -> u32 {
     return ws[cp.o_loff + c];
@@ -25,7 +45,10 @@ fn list_end(c: u32) -> u32 {
 
 // Sweeps in one workgroup; returns the sweeps taken.
 fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
-    let nc = atomicLoad(&cc.n_colors);
+    if (l == 0u) {
+        sh_nc = atomicLoad(&cc.n_colors);
+    }
+    let nc = workgroupUniformLoad(&sh_nc);
     var taken = 0u;
     for (var sweep = 0u; sweep < cp.max_sweeps; sweep++) {
         var change = 0.0;
@@ -37,18 +60,7 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
             storageBarrier();
         }
         taken += 1u;
-        sh_m[l] = change;
-        workgroupBarrier();
-        for (var h = SG / 2u; h > 0u; h >>= 1u) {
-            if (l < h) {
-                sh_m[l] = max(sh_m[l], sh_m[l + h]);
-            }
-            workgroupBarrier();
-        }
-        if (l == 0u) {
-            sh_w = select(0u, 1u, sh_m[0] <= cp.tolerance);
-        }
-        if (workgroupUniformLoad(&sh_w) != 0u) {
+        if (!any_positive(l, change - cp.tolerance)) {
             return taken;
         }
     }
@@ -81,8 +93,11 @@ fn recheck_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> bool {
 @compute @workgroup_size(SG)
 fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
+    if (!running_uniform(l)) {
+        return;
+    }
     if (l == 0u) {
-        sh_w = select(0u, 1u, contact_running() && atomicLoad(&cc.lagrange) > 0u);
+        sh_w = select(0u, 1u, atomicLoad(&cc.lagrange) > 0u);
     }
     if (workgroupUniformLoad(&sh_w) == 0u) {
         return;
@@ -92,17 +107,14 @@ fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     let inv_scale = inv_mass_scale();
     var taken = sweeps_one(l, dt, inv_scale);
     for (var round = 0u; round < ACTIVE_SET_ROUNDS; round++) {
-        if (l == 0u) {
-            atomicStore(&sh_n, 0u);
-        }
-        workgroupBarrier();
+        var added = 0.0;
         for (var k = l; k < cp.n_slots; k += SG) {
             if (recheck_slot(k, dt, dtn, inv_scale)) {
-                atomicAdd(&sh_n, 1u);
+                added = 1.0;
             }
         }
         storageBarrier();
-        if (workgroupUniformLoad(&sh_n) == 0u) {
+        if (!any_positive(l, added)) {
             break;
         }
         taken += sweeps_one(l, dt, inv_scale);

@@ -126,7 +126,7 @@ mesh = {{ rectangle = {{ origin = [0.0, {y0:e}], size = [0.1, {height:e}], cells
 }
 
 fn build(scene: &Scene) -> Result<(Model, Plan)> {
-    let model = Model::build(scene)?;
+    let model = crate::run::model(scene)?;
     let plan = Plan::new(scene, &model);
     Ok((model, plan))
 }

@@ -174,7 +174,7 @@ fn load(path: &Path, end_time: Option<f64>) -> anyhow::Result<(Scene, Model, Pla
         }
         scene.run.end_time = t;
     }
-    let model = Model::build(&scene)?;
+    let model = ricochet::run::model(&scene)?;
     let plan = Plan::new(&scene, &model);
     Ok((scene, model, plan))
 }
@@ -413,11 +413,31 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
         scene.run.end_time
     );
     if let Some(c) = contact.as_mut() {
+        let groups: Vec<&ricochet::scene::Contact> =
+            model.contacts.iter().filter(|c| c.group).collect();
+        let mut group_bodies: Vec<usize> = groups.iter().flat_map(|c| c.bodies.clone()).collect();
+        group_bodies.sort_unstable();
+        group_bodies.dedup();
+        let self_bodies: usize = groups
+            .iter()
+            .filter(|c| c.self_contact)
+            .map(|c| c.bodies.len())
+            .sum();
+        let names = c.names();
         println!(
-            "contact    {} contact(s), {} rigid wall(s): {}; search margin {:.4e} m",
+            "contact    {} contact tables ({} pairs, {} groups over {} bodies, self-contact on {}), \
+             {} walls{}; search margin {:.4e} m",
             plan.contacts,
+            plan.contacts - groups.len(),
+            groups.len(),
+            group_bodies.len(),
+            self_bodies,
             plan.walls,
-            c.names().join(", "),
+            if names.len() <= 8 {
+                format!(": {}", names.join(", "))
+            } else {
+                String::new()
+            },
             c.margin()
         );
         match c.penalty_step() {

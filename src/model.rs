@@ -6,7 +6,7 @@
 use std::ops::Range;
 
 use crate::contact::surface::Surface;
-use crate::contact::{ContactSet, Overlap};
+use crate::contact::Overlap;
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::scene::{self, Scene};
@@ -97,13 +97,15 @@ pub struct Model {
 }
 
 impl Model {
-    /// Builds the model of `scene`: meshes each body, lumps the mass, applies initial velocities
-    /// and collects the velocity constraints.
+    /// Assembles the model of `scene`: meshes each body, lumps the mass, applies initial
+    /// velocities, collects the velocity constraints and resolves the pressure loads. Contact
+    /// overlaps at t = 0 are not resolved here: a run's model comes from [`crate::run::model`],
+    /// which also calls [`crate::contact::overlap::resolve`].
     ///
     /// # Errors
     /// [`crate::Error::Invalid`] for a mesh with an inverted, zero-area or non-convex element, or a
     /// boundary box that selects no node.
-    pub fn build(scene: &Scene) -> Result<Model> {
+    pub fn assemble(scene: &Scene) -> Result<Model> {
         let mut m = Model {
             position: Vec::new(),
             mass: Vec::new(),
@@ -236,7 +238,18 @@ impl Model {
                 v[1] = y;
             }
         }
-        m.remove_initial_overlaps(scene)?;
+        m.load_pressures(scene)?;
+        Ok(m)
+    }
+
+    /// Resolves the pressure loads of `scene` on the current reference positions (again after
+    /// [`crate::contact::overlap::resolve`] moved nodes).
+    ///
+    /// # Errors
+    /// [`crate::Error::Invalid`] when a load's box selects no boundary edge.
+    pub fn load_pressures(&mut self, scene: &Scene) -> Result<()> {
+        let m = self;
+        m.pressures.clear();
         for p in &scene.pressures {
             let load = m.pressure_load(p, scene.bodies[p.body].thickness);
             if load.edges == 0 {
@@ -252,114 +265,6 @@ impl Model {
                 ));
             }
             m.pressures.push(load);
-        }
-        Ok(m)
-    }
-
-    /// Moves slave nodes that start behind a contact surface or a wall onto it, in the reference
-    /// configuration (so without strain, and so without energy), and records what was moved in
-    /// [`Model::initial_overlaps`]. Touching bodies at rest then stay at rest. Nodal masses are
-    /// kept (the moves are small against the elements).
-    fn remove_initial_overlaps(&mut self, scene: &Scene) -> Result<()> {
-        if !self.has_contact() {
-            return Ok(());
-        }
-        // Moving one body's nodes can uncover another's (two-pass): a few rounds.
-        for _ in 0..4 {
-            let Some(mut set) = ContactSet::new(self) else {
-                return Ok(());
-            };
-            let found = set.initial_overlaps(self);
-            if found.is_empty() {
-                break;
-            }
-            // Walls, and one contact pass per round: the reverse pass of a two-pass contact
-            // then finds its nodes on the moved surface instead of moving them apart again.
-            let first_pass = found.iter().filter_map(|o| o.pass).min();
-            let found: Vec<Overlap> = found
-                .into_iter()
-                .filter(|o| o.pass.is_none() || o.pass == first_pass)
-                .collect();
-            let mut moved = vec![false; self.position.len()];
-            for o in &found {
-                let i = o.node as usize;
-                if moved[i] {
-                    continue;
-                }
-                moved[i] = true;
-                let p = &mut self.position[i];
-                p[0] += o.depth * o.normal[0];
-                p[1] += o.depth * o.normal[1];
-            }
-            for (e, q) in self.quads.iter().enumerate() {
-                if !q.iter().any(|&n| moved[n as usize]) {
-                    continue;
-                }
-                let x = q.map(|n| self.position[n as usize]);
-                let g = quad_geometry(&x);
-                if !(g.area > 0.0 && min_corner_ratio(&x, g.area) > 1e-8) {
-                    let b = self.element_body[e] as usize;
-                    return Err(scene::invalid(
-                        scene,
-                        format!("body[{b}].mesh"),
-                        format!("element {}", e - self.bodies[b].elements.start),
-                        "moving the nodes that overlap a contact surface at t = 0 onto it inverts this element: separate the bodies",
-                    ));
-                }
-                let cx = 0.25 * (x[0][0] + x[1][0] + x[2][0] + x[3][0]);
-                let cy = 0.25 * (x[0][1] + x[1][1] + x[2][1] + x[3][1]);
-                self.corners[e] = x.map(|p| [p[0] - cx, p[1] - cy]);
-            }
-            self.initial_overlaps.extend(found);
-        }
-        self.refuse_deep_overlaps(scene)
-    }
-
-    /// After the overlap removal: a slave node still inside an element of its master body is
-    /// deeper than half a contact segment (the contact cannot tell from which side it came, and
-    /// would leave it there for the whole run, reporting no penetration): an error naming it.
-    fn refuse_deep_overlaps(&self, scene: &Scene) -> Result<()> {
-        for (ci, c) in self.contacts.iter().enumerate() {
-            let mut dirs = vec![(c.bodies[0], c.bodies[1])];
-            if c.two_pass {
-                dirs.push((c.bodies[1], c.bodies[0]));
-            }
-            for (slave, master) in dirs {
-                let nodes = Surface::of_body(self, slave).nodes;
-                let mb = &self.bodies[master];
-                let corners: Vec<[[f64; 2]; 4]> = mb
-                    .elements
-                    .clone()
-                    .map(|e| self.quads[e].map(|n| self.position[n as usize]))
-                    .collect();
-                let points: Vec<[f64; 2]> =
-                    nodes.iter().map(|&n| self.position[n as usize]).collect();
-                for (k, local) in crate::contact::broad::points_in_boxes(&points, &corners) {
-                    let (n, e) = (nodes[k], mb.elements.start + local);
-                    let x = corners[local];
-                    // Inside by more than round-off: the moved nodes lie on the surface.
-                    let tol = 1e-6 * quad_geometry(&x).area.abs().sqrt();
-                    let depth = inside_depth(&x, self.position[n as usize]);
-                    if depth > tol {
-                        let sb = &self.bodies[slave];
-                        return Err(scene::invalid(
-                            scene,
-                            format!("contact[{ci}]"),
-                            format!("{:?}", c.name),
-                            &format!(
-                                "at t = 0, node {} of body {:?} lies inside element {} of body {:?} \
-                                 (at least {depth:.3e} m from that element's sides), deeper than half \
-                                 a contact segment: such an overlap is not removed and contact \
-                                 would leave the node inside for the whole run; separate the bodies",
-                                n as usize - sb.nodes.start,
-                                sb.name,
-                                e - mb.elements.start,
-                                mb.name
-                            ),
-                        ));
-                    }
-                }
-            }
         }
         Ok(())
     }
@@ -444,22 +349,6 @@ pub fn lumped_mass(x: &[[f64; 2]; 4], rho_t: f64) -> [f64; 4] {
         }
     }
     m
-}
-
-/// How far `p` lies inside the convex counter-clockwise quad `x`: the smallest distance to the
-/// lines of its sides (negative or zero outside or on the boundary).
-fn inside_depth(x: &[[f64; 2]; 4], p: [f64; 2]) -> f64 {
-    let mut depth = f64::INFINITY;
-    for a in 0..4 {
-        let (s, t) = (x[a], x[(a + 1) % 4]);
-        let d = [t[0] - s[0], t[1] - s[1]];
-        let l = d[0].hypot(d[1]);
-        if l > 0.0 {
-            // Left of s -> t is inside.
-            depth = depth.min((d[0] * (p[1] - s[1]) - d[1] * (p[0] - s[0])) / l);
-        }
-    }
-    depth
 }
 
 #[cfg(test)]

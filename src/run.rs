@@ -28,6 +28,18 @@ pub fn schedule(scene: &Scene) -> Schedule {
     }
 }
 
+/// The model of a run of `scene`: [`Model::assemble`], then the contact overlaps at t = 0
+/// moved onto their surfaces ([`crate::contact::overlap::resolve`]).
+///
+/// # Errors
+/// [`crate::Error::Invalid`] for an invalid mesh, boundary or pressure box, or an overlap at t = 0
+/// that cannot be resolved.
+pub fn model(scene: &Scene) -> Result<Model> {
+    let mut model = Model::assemble(scene)?;
+    crate::contact::overlap::resolve(&mut model, scene)?;
+    Ok(model)
+}
+
 /// Everything a finished run produced, besides the files.
 #[derive(Debug, Clone)]
 pub struct RunResult {

@@ -53,11 +53,20 @@ struct RawPressure {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawContact {
-    bodies: Vec<String>,
+    bodies: RawBodies,
     name: Option<String>,
     method: Option<String>,
     two_pass: Option<bool>,
+    self_contact: Option<bool>,
     penalty_scale: Option<f64>,
+}
+
+/// `bodies` of a `[[contact]]`: the string "all" or a list of names.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum RawBodies {
+    Word(String),
+    List(Vec<String>),
 }
 
 #[derive(Debug, Deserialize)]
@@ -328,16 +337,26 @@ pub enum ContactMethod {
 /// Default penalty scale `s` in k = s K t L^2 / A.
 pub const DEFAULT_PENALTY_SCALE: f64 = 0.1;
 
-/// Node-to-segment contact between two bodies.
+/// Node-to-segment contact: a pair of bodies, or a group (every pair among its bodies, and each
+/// body against itself with self-contact).
 #[derive(Debug, Clone)]
 pub struct Contact {
-    /// Name used in history columns (`<a>-<b>` unless given).
+    /// Name used in history columns (`<a>-<b>` for a pair, `all` or the names joined by `+` for
+    /// a group, unless given).
     pub name: String,
-    /// The first body (slave nodes of the first pass) and the second (its master segments).
-    pub bodies: [usize; 2],
+    /// A pair: the first body (slave nodes of the first pass) and the second (its master
+    /// segments). A group: its bodies, ascending.
+    pub bodies: Vec<usize>,
+    /// A group: one symmetric pass over all its bodies' surfaces (every unordered pair in both
+    /// directions, the history's force the sum over the pairs of the force on the lower-indexed
+    /// body). Otherwise a pair as above.
+    pub group: bool,
+    /// A group whose bodies also contact their own surfaces.
+    pub self_contact: bool,
     /// Enforcement.
     pub method: ContactMethod,
-    /// Also the reverse pass (second body's nodes against the first body's segments).
+    /// Also the reverse pass (second body's nodes against the first body's segments); always
+    /// true for a group (it is symmetric).
     pub two_pass: bool,
     /// Penalty scale `s` (penalty only).
     pub penalty_scale: f64,
@@ -467,6 +486,19 @@ fn fmt_num(x: f64) -> String {
     format!("{x:?}")
 }
 
+/// `name`, or, when another contact or wall has it already, `name` with the first free suffix
+/// `_2`, `_3`, ... (default names only: a name given in the scene must be unique).
+fn free_name(name: &str, contacts: &[Contact], walls: &[RigidWall]) -> String {
+    let taken = |n: &str| contacts.iter().any(|c| c.name == n) || walls.iter().any(|w| w.name == n);
+    if !taken(name) {
+        return name.to_string();
+    }
+    (2..)
+        .map(|k| format!("{name}_{k}"))
+        .find(|n| !taken(n))
+        .unwrap_or_else(|| name.to_string())
+}
+
 impl Validator<'_> {
     fn invalid(&self, key: impl Into<String>, value: impl Into<String>, reason: &str) -> Error {
         Error::Invalid {
@@ -547,6 +579,7 @@ impl Validator<'_> {
         let mut contacts: Vec<Contact> = Vec::new();
         for (i, c) in raw.contact.iter().enumerate() {
             let key = format!("contact[{i}]");
+            // Two contacts with one default name are the same contact given twice: refused.
             let c = self.contact(&key, c, &bodies)?;
             self.unique_name(&key, &c.name, &contacts, &[])?;
             contacts.push(c);
@@ -554,7 +587,12 @@ impl Validator<'_> {
         let mut walls: Vec<RigidWall> = Vec::new();
         for (i, w) in raw.rigid_wall.iter().enumerate() {
             let key = format!("rigid_wall[{i}]");
-            let w = self.wall(&key, w, &bodies)?;
+            // A wall's default name (its bodies joined by `-`) may be a contact's: suffixed.
+            let named = w.name.is_some();
+            let mut w = self.wall(&key, w, &bodies)?;
+            if !named {
+                w.name = free_name(&w.name, &contacts, &walls);
+            }
             self.unique_name(&key, &w.name, &contacts, &walls)?;
             walls.push(w);
         }
@@ -642,33 +680,84 @@ impl Validator<'_> {
     }
 
     fn contact(&self, key: &str, c: &RawContact, bodies: &[Body]) -> Result<Contact> {
-        if c.bodies.len() != 2 {
+        let bkey = format!("{key}.bodies");
+        let self_contact = c.self_contact.unwrap_or(false);
+        let (list, all) = match &c.bodies {
+            RawBodies::Word(w) if w == "all" => ((0..bodies.len()).collect::<Vec<_>>(), true),
+            RawBodies::Word(w) => {
+                return Err(self.invalid(
+                    bkey,
+                    format!("{w:?}"),
+                    "expected \"all\" or a list of body names",
+                ))
+            }
+            RawBodies::List(names) => {
+                let mut list = Vec::new();
+                for n in names {
+                    let i = self.body_index(&bkey, n, bodies)?;
+                    if list.contains(&i) {
+                        return Err(self.invalid(
+                            bkey,
+                            format!("{names:?}"),
+                            &format!("body {n:?} is named twice: the bodies must differ"),
+                        ));
+                    }
+                    list.push(i);
+                }
+                (list, false)
+            }
+        };
+        let shown = match &c.bodies {
+            RawBodies::Word(w) => format!("{w:?}"),
+            RawBodies::List(names) => format!("{names:?}"),
+        };
+        if list.is_empty() {
+            return Err(self.invalid(bkey, shown, "name at least one body"));
+        }
+        if list.len() == 1 && !self_contact {
             return Err(self.invalid(
-                format!("{key}.bodies"),
-                format!("{:?}", c.bodies),
-                "give exactly two body names: [slave, master]",
+                bkey,
+                shown,
+                "a single body needs self_contact = true (give exactly two bodies for a contact \
+                 pair, or more, or \"all\", for a group)",
             ));
         }
-        let a = self.body_index(&format!("{key}.bodies"), &c.bodies[0], bodies)?;
-        let b = self.body_index(&format!("{key}.bodies"), &c.bodies[1], bodies)?;
-        if a == b {
+        let group = all || list.len() > 2 || self_contact;
+        if group && c.two_pass == Some(false) {
             return Err(self.invalid(
-                format!("{key}.bodies"),
-                format!("{:?}", c.bodies),
-                "the two bodies must differ (self-contact is not supported)",
+                format!("{key}.two_pass"),
+                "false",
+                &format!(
+                    "a contact group (bodies = {shown}{}) is symmetric: every pair in both \
+                     directions; two_pass = false applies to a pair of bodies only",
+                    if self_contact { ", self_contact" } else { "" }
+                ),
             ));
         }
         let method = self.method(&format!("{key}.method"), c.method.as_deref())?;
         let penalty_scale =
             self.penalty_scale(&format!("{key}.penalty_scale"), c.penalty_scale, method)?;
+        let names: Vec<&str> = list.iter().map(|&i| bodies[i].name.as_str()).collect();
+        let default = if !group {
+            names.join("-")
+        } else if all {
+            "all".to_string()
+        } else if names.len() == 1 {
+            format!("{}-self", names[0])
+        } else {
+            names.join("+")
+        };
+        let mut list = list;
+        if group {
+            list.sort_unstable();
+        }
         Ok(Contact {
-            name: c
-                .name
-                .clone()
-                .unwrap_or_else(|| format!("{}-{}", c.bodies[0], c.bodies[1])),
-            bodies: [a, b],
+            name: c.name.clone().unwrap_or(default),
+            bodies: list,
+            group,
+            self_contact,
             method,
-            two_pass: c.two_pass.unwrap_or(true),
+            two_pass: group || c.two_pass.unwrap_or(true),
             penalty_scale,
         })
     }

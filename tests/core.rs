@@ -11,6 +11,8 @@
 //!   pressure load and of mass damping;
 //! - [`patch_contact`]: the contact patch test (two blocks, non-matching meshes, pressure load,
 //!   mass damping): two-pass Lagrange exact, one pass failing as it should;
+//! - [`general_contact`]: contact groups (`bodies = "all"`, lists) and self-contact: the scene
+//!   forms, the GPU tables, a pile of 16 disks and a ring pressed onto itself;
 //! - [`contact`]: rod impact (Lagrange, penalty, rigid wall, impedance mismatch), corner-first
 //!   square on a wall, the contact plan and history columns;
 //! - [`stress`]: the stiff and extreme cases of `assets/stress/` (REFERENCES.md section 6): stiff
@@ -31,6 +33,8 @@ mod bad_input;
 mod contact;
 #[path = "core/energy.rs"]
 mod energy;
+#[path = "core/general_contact.rs"]
+mod general_contact;
 #[path = "core/hourglass.rs"]
 mod hourglass;
 #[path = "core/mass.rs"]

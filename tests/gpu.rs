@@ -37,7 +37,7 @@ fn context() -> Option<Arc<GpuContext>> {
 
 fn load(text: &str, name: &str) -> (Scene, Model, Plan) {
     let scene = Scene::parse(text, Path::new(name)).expect("scene parses");
-    let model = Model::build(&scene).expect("model builds");
+    let model = ricochet::run::model(&scene).expect("model builds");
     let plan = Plan::new(&scene, &model);
     (scene, model, plan)
 }

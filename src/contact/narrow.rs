@@ -1,5 +1,60 @@
-//! Narrow phase: a node against a segment (closest point, parameter, normal, gap), and the
-//! choice among a node's candidate segments. Pure functions shared by every contact pass.
+//! Narrow phase: which slave nodes and segments may pair at all ([`admissible`]), a node against
+//! a segment (closest point, parameter, normal, gap), the choice among a node's candidate
+//! segments (selection key, the corner rule), and the step's constraints built from them
+//! (`collect_passes`, `collect_walls`). The free functions are pure and shared with the GPU
+//! kernel, which implements the same rules.
+
+use super::solve::penalty_impulse;
+use super::{dot, sub, Constraint, ContactSet, Pass};
+use crate::scene::ContactMethod;
+
+/// Whether master segment a->b (body `seg_body`) may be paired with slave node s (body
+/// `slave_body`, neighbours np, nn along its own surface) in a pass that admits self-contact
+/// when `self_contact`. `xs, xa, xb`: reference (undeformed) positions of s, a, b.
+///
+/// Never a segment of the node itself; always a segment of another body; within one body (with
+/// self-contact only) neither a segment next to the node (one holding np or nn) nor one that, in
+/// the reference configuration, the node projects onto (xi in [0, 1]) and lies strictly behind
+/// (negative gap along its outward normal): the far side of the same body, e.g. a thin strip's
+/// other face.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn admissible(
+    s: u32,
+    [np, nn]: [u32; 2],
+    slave_body: u32,
+    [a, b]: [u32; 2],
+    seg_body: u32,
+    self_contact: bool,
+    xs: [f64; 2],
+    xa: [f64; 2],
+    xb: [f64; 2],
+) -> bool {
+    if a == s || b == s {
+        return false;
+    }
+    if slave_body != seg_body {
+        return true;
+    }
+    if !self_contact {
+        return false;
+    }
+    if a == np || a == nn || b == np || b == nn {
+        return false;
+    }
+    let t = [xb[0] - xa[0], xb[1] - xa[1]];
+    let l2 = t[0] * t[0] + t[1] * t[1];
+    if l2 > 0.0 {
+        let d = [xs[0] - xa[0], xs[1] - xa[1]];
+        let xi = (d[0] * t[0] + d[1] * t[1]) / l2;
+        // Gap along the outward normal (t_y, -t_x) / |t|: its sign is that of d . (t_y, -t_x).
+        let behind = d[0] * t[1] - d[1] * t[0] < 0.0;
+        if (0.0..=1.0).contains(&xi) && behind {
+            return false;
+        }
+    }
+    true
+}
 
 /// Tolerance on the segment parameter: a node just past a segment end (round-off at a shared
 /// corner) still projects onto it, clamped.
@@ -87,6 +142,246 @@ pub fn vertex(p: [f64; 2], m: [f64; 2], n1: [f64; 2], n2: [f64; 2]) -> Option<Ve
     })
 }
 
+/// Signed distance of `p` to the line of `a -> b` (outward normal side positive).
+#[inline]
+fn line_gap(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let t = sub(b, a);
+    let l = t[0].hypot(t[1]);
+    if l > 0.0 {
+        dot(sub(p, a), [t[1] / l, -t[0] / l])
+    } else {
+        0.0
+    }
+}
+
+impl ContactSet {
+    /// dt (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along n (per direction, constrained directions rigid).
+    pub(super) fn weight(
+        &self,
+        s: u32,
+        ab: Option<(u32, u32)>,
+        xi: f64,
+        n: [f64; 2],
+        dt: f64,
+    ) -> f64 {
+        let along = |l: u32| {
+            let im = self.inv_mass[l as usize];
+            n[0] * n[0] * im[0] + n[1] * n[1] * im[1]
+        };
+        let mut w = along(s);
+        if let Some((a, b)) = ab {
+            w += (1.0 - xi) * (1.0 - xi) * along(a) + xi * xi * along(b);
+        }
+        dt * w * self.inv_mass_scale
+    }
+
+    pub(super) fn free_relative(
+        &self,
+        s: u32,
+        ab: Option<(u32, u32)>,
+        xi: f64,
+        n: [f64; 2],
+    ) -> f64 {
+        let vs = self.v_free[s as usize];
+        let mut r = dot(vs, n);
+        if let Some((a, b)) = ab {
+            r -=
+                (1.0 - xi) * dot(self.v_free[a as usize], n) + xi * dot(self.v_free[b as usize], n);
+        }
+        r
+    }
+
+    /// Whether slave `s` (own outward normal `own`) is in contact with segment `j` of pass `p`,
+    /// and if so its selection key (larger is better) and projection.
+    ///
+    /// Lagrange: projection at the trial positions; the node penetrates and came from the
+    /// segment's front (see [`penetrates`]); key (gap before the step clamped at 0, trial gap):
+    /// the segment the node came from the front of, then the closest. Penalty: projection at
+    /// u_n, penetrating by less than half the segment; key (gap, 0).
+    fn qualify(
+        &self,
+        p: &Pass,
+        s: u32,
+        own: [f64; 2],
+        j: usize,
+    ) -> Option<((f64, f64), Projection)> {
+        let [a, b] = p.segments[j];
+        let (sl, al, bl) = (s as usize, a as usize, b as usize);
+        // Only segments that face the node's own surface: at a corner shared by two segments
+        // this keeps the face the node meets, not the edge it touches end-on.
+        let seg_t = sub(self.x_n[bl], self.x_n[al]);
+        if dot(own, [seg_t[1], -seg_t[0]]) >= 0.0 {
+            return None;
+        }
+        match p.method {
+            ContactMethod::Lagrange => {
+                let pr = project(self.x_tr[sl], self.x_tr[al], self.x_tr[bl])?;
+                // Gap before the step, to the segment's line at u_n.
+                let before = line_gap(self.x_n[sl], self.x_n[al], self.x_n[bl]);
+                penetrates(pr.gap, before, pr.length).then_some(((before.min(0.0), pr.gap), pr))
+            }
+            ContactMethod::Penalty => {
+                let pr = project(self.x_n[sl], self.x_n[al], self.x_n[bl])?;
+                (pr.gap < 0.0 && pr.gap > -0.5 * pr.length).then_some(((pr.gap, 0.0), pr))
+            }
+        }
+    }
+
+    /// The constraints of the passes' slave nodes; with `skip` (a re-check, see `recheck`),
+    /// Lagrange passes only, and not the nodes that have one (sorted `warm_key`s).
+    pub(super) fn collect_passes(&mut self, dt: f64, dt_n: f64, skip: Option<&[[u32; 2]]>) {
+        for pi in 0..self.passes.len() {
+            let p = &self.passes[pi];
+            if skip.is_some() && p.method != ContactMethod::Lagrange {
+                continue;
+            }
+            let mut k = 0;
+            while k < p.candidates.len() {
+                let si = p.candidates[k].0;
+                let s = p.slaves[si as usize];
+                // The slave node's own outward normal (unnormalised), at u_n.
+                let [np, nn] = p.neighbours[si as usize];
+                let t = sub(self.x_n[nn as usize], self.x_n[np as usize]);
+                let own = [t[1], -t[0]];
+                let first = k;
+                while k < p.candidates.len() && p.candidates[k].0 == si {
+                    k += 1;
+                }
+                let range = &p.candidates[first..k];
+                if skip.is_some_and(|d| d.binary_search(&[p.interface as u32, s]).is_ok()) {
+                    continue;
+                }
+                // (key, segment, projection) of the best candidate.
+                let mut best: Option<((f64, f64), usize, Projection)> = None;
+                for &(_, j) in range {
+                    let j = j as usize;
+                    if let Some((key, pr)) = self.qualify(p, s, own, j) {
+                        if best.is_none_or(|(bk, _, _)| key > bk) {
+                            best = Some((key, j, pr));
+                        }
+                    }
+                }
+                let Some((key, j, mut pr)) = best else {
+                    continue;
+                };
+                let [a, b] = p.segments[j];
+                // A tie with the neighbouring segment at a shared master node: the node meets
+                // that master node (a corner met end-on, e.g. corner to corner), not either
+                // face. Contact with the node itself along its averaged normal, so that the
+                // choice does not fall to round-off (which breaks symmetry).
+                for &(_, j2) in range {
+                    let j2 = j2 as usize;
+                    let [a2, b2] = p.segments[j2];
+                    let m = if a2 == b && b2 != a {
+                        b
+                    } else if b2 == a && a2 != b {
+                        a
+                    } else {
+                        continue;
+                    };
+                    let Some((key2, pr2)) = self.qualify(p, s, own, j2) else {
+                        continue;
+                    };
+                    if !ties(key, key2, pr.length) {
+                        continue;
+                    }
+                    let x = if p.method == ContactMethod::Lagrange {
+                        &self.x_tr
+                    } else {
+                        &self.x_n
+                    };
+                    if let Some(v) = vertex(x[s as usize], x[m as usize], pr.normal, pr2.normal) {
+                        pr.normal = v.normal;
+                        pr.gap = v.gap;
+                        pr.xi = if m == b { 1.0 } else { 0.0 };
+                    }
+                    break;
+                }
+                let w = self.weight(s, Some((a, b)), pr.xi, pr.normal, dt);
+                if w.is_nan() || w <= 0.0 {
+                    continue;
+                }
+                let mut c = Constraint {
+                    interface: p.interface as u32,
+                    s,
+                    a,
+                    b,
+                    xi: pr.xi,
+                    n: pr.normal,
+                    g0: pr.gap,
+                    w,
+                    lambda: 0.0,
+                    sign: p.sign(si as usize, j),
+                    penetration: 0.0,
+                };
+                if p.method == ContactMethod::Penalty {
+                    let rate = self.free_relative(s, Some((a, b)), pr.xi, pr.normal);
+                    let g_trial = pr.gap + dt * rate;
+                    c.lambda = penalty_impulse(p.stiffness[j], pr.gap, rate, g_trial, w, dt, dt_n);
+                    c.penetration = -pr.gap;
+                    c.w = -w;
+                }
+                self.cons.push(c);
+            }
+        }
+    }
+
+    /// The constraints of the walls' nodes; `skip` as for [`Self::collect_passes`].
+    pub(super) fn collect_walls(&mut self, dt: f64, dt_n: f64, skip: Option<&[[u32; 2]]>) {
+        for wi in 0..self.walls.len() {
+            let w = &self.walls[wi];
+            if skip.is_some() && w.method != ContactMethod::Lagrange {
+                continue;
+            }
+            for (idx, &l) in w.nodes.iter().enumerate() {
+                if skip.is_some_and(|d| d.binary_search(&[w.interface as u32, l]).is_ok()) {
+                    continue;
+                }
+                let n = w.normal;
+                let (g, g_tr) = (
+                    dot(sub(self.x_n[l as usize], w.point), n),
+                    dot(sub(self.x_tr[l as usize], w.point), n),
+                );
+                let weight = self.weight(l, None, 0.0, n, dt);
+                if weight.is_nan() || weight <= 0.0 {
+                    continue;
+                }
+                let mut c = Constraint {
+                    interface: w.interface as u32,
+                    s: l,
+                    a: u32::MAX,
+                    b: u32::MAX,
+                    xi: 0.0,
+                    n,
+                    g0: g_tr,
+                    w: weight,
+                    lambda: 0.0,
+                    sign: 1.0,
+                    penetration: 0.0,
+                };
+                match w.method {
+                    ContactMethod::Lagrange => {
+                        if g_tr >= 0.0 {
+                            continue;
+                        }
+                    }
+                    ContactMethod::Penalty => {
+                        if g >= 0.0 {
+                            continue;
+                        }
+                        let rate = dot(self.v_free[l as usize], n);
+                        c.lambda =
+                            penalty_impulse(w.stiffness[idx], g, rate, g_tr, weight, dt, dt_n);
+                        c.penetration = -g;
+                        c.w = -weight;
+                    }
+                }
+                self.cons.push(c);
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -99,6 +394,73 @@ mod tests {
         assert!((v.gap + 0.2).abs() < 1e-15);
         // Opposite normals (a zero-thickness sliver) have no corner normal.
         assert!(vertex([0.0, 0.0], [0.0, 0.0], [0.0, 1.0], [0.0, -1.0]).is_none());
+    }
+
+    #[test]
+    fn admissible_pairs_follow_bodies_neighbours_and_the_far_side() {
+        // Segment a=10 -> b=11 along +x (outward normal -y: its body lies above it).
+        let (xa, xb) = ([0.0, 0.0], [1.0, 0.0]);
+        let front = [0.5, -0.1];
+        let behind = [0.5, 0.1];
+        // Never the node's own segment.
+        assert!(!admissible(10, [9, 11], 0, [10, 11], 1, true, xa, xa, xb));
+        assert!(!admissible(11, [10, 12], 0, [10, 11], 1, true, xb, xa, xb));
+        // Another body: always, behind or not.
+        assert!(admissible(1, [0, 2], 0, [10, 11], 1, false, behind, xa, xb));
+        assert!(admissible(1, [0, 2], 1, [10, 11], 0, false, front, xa, xb));
+        // The same body: only with self-contact ...
+        assert!(!admissible(1, [0, 2], 3, [10, 11], 3, false, front, xa, xb));
+        assert!(admissible(1, [0, 2], 3, [10, 11], 3, true, front, xa, xb));
+        // ... never next to the node ...
+        assert!(!admissible(1, [10, 2], 3, [10, 11], 3, true, front, xa, xb));
+        assert!(!admissible(1, [0, 11], 3, [10, 11], 3, true, front, xa, xb));
+        // ... never the far side (projects onto the segment and lies behind it) ...
+        assert!(!admissible(1, [0, 2], 3, [10, 11], 3, true, behind, xa, xb));
+        assert!(!admissible(
+            1,
+            [0, 2],
+            3,
+            [10, 11],
+            3,
+            true,
+            [1.0, 0.1],
+            xa,
+            xb
+        ));
+        // ... but behind the segment's line beyond its ends, or on it, is admissible.
+        assert!(admissible(
+            1,
+            [0, 2],
+            3,
+            [10, 11],
+            3,
+            true,
+            [1.5, 0.1],
+            xa,
+            xb
+        ));
+        assert!(admissible(
+            1,
+            [0, 2],
+            3,
+            [10, 11],
+            3,
+            true,
+            [-0.5, 0.1],
+            xa,
+            xb
+        ));
+        assert!(admissible(
+            1,
+            [0, 2],
+            3,
+            [10, 11],
+            3,
+            true,
+            [0.5, 0.0],
+            xa,
+            xb
+        ));
     }
 
     #[test]

@@ -15,7 +15,6 @@ use std::sync::Arc;
 
 use crate::error::{Error, Result};
 use crate::gpu::{GpuContext, GpuSolver};
-use crate::model::Model;
 use crate::plan::Plan;
 use crate::run::{run, schedule};
 use crate::scene::Scene;
@@ -275,7 +274,7 @@ fn run_one(
         case.file.display()
     ));
     let scene = Scene::parse(&text, &label)?;
-    let model = Model::build(&scene)?;
+    let model = crate::run::model(&scene)?;
     let plan = Plan::new(&scene, &model);
     let mut solver: Box<dyn Solver> = match ctx {
         Some(c) => Box::new(GpuSolver::new(c, &model, &plan, schedule(&scene))?),

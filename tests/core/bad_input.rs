@@ -420,6 +420,33 @@ fn contact_keys_are_checked() {
         &["contact[0].penalty_scale", "-1.0", "positive"],
     );
     expect_rejected(
+        "contact_group_one_body",
+        &with_contact("[[contact]]\nbodies = [\"other\"]\n"),
+        &["contact[0].bodies", "[\"other\"]", "self_contact = true"],
+    );
+    expect_rejected(
+        "contact_group_duplicate",
+        &with_contact(
+            "[[contact]]\nbodies = [\"block\", \"other\", \"block\"]\nself_contact = true\n",
+        ),
+        &["contact[0].bodies", "\"block\" is named twice"],
+    );
+    expect_rejected(
+        "contact_group_empty",
+        &with_contact("[[contact]]\nbodies = []\n"),
+        &["contact[0].bodies", "[]", "at least one body"],
+    );
+    expect_rejected(
+        "contact_group_word",
+        &with_contact("[[contact]]\nbodies = \"everything\"\n"),
+        &["contact[0].bodies", "\"everything\"", "\"all\""],
+    );
+    expect_rejected(
+        "contact_group_one_pass",
+        &with_contact("[[contact]]\nbodies = \"all\"\ntwo_pass = false\n"),
+        &["contact[0].two_pass", "false", "group"],
+    );
+    expect_rejected(
         "contact_duplicate_name",
         &with_contact(
             "[[contact]]\nbodies = [\"block\", \"other\"]\n[[contact]]\nbodies = [\"block\", \"other\"]\n",

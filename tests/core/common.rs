@@ -57,7 +57,8 @@ pub fn parse(text: &str) -> Scene {
 /// Scene, model and plan of scene text.
 pub fn build(text: &str) -> (Scene, Model, Plan) {
     let scene = parse(text);
-    let model = Model::build(&scene).unwrap_or_else(|e| panic!("model does not build: {e}"));
+    let model =
+        ricochet::run::model(&scene).unwrap_or_else(|e| panic!("model does not build: {e}"));
     let plan = Plan::new(&scene, &model);
     (scene, model, plan)
 }

@@ -341,7 +341,7 @@ fn elastic_disk_on_a_rigid_wall_matches_the_contact_time_peak_force_and_restitut
 
 /// Two stacked blocks whose meshes overlap by `overlap` (non-matching: 4 and 3 cells along x)
 /// and a wall the lower block's bottom starts `overlap` behind, at rest.
-fn overlapping_blocks(overlap: f64, method: &str) -> String {
+pub(crate) fn overlapping_blocks(overlap: f64, method: &str) -> String {
     format!(
         r#"
 [run]

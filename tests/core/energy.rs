@@ -11,7 +11,6 @@
 
 use std::path::Path;
 
-use ricochet::model::Model;
 use ricochet::output::history::EnergyAudit;
 use ricochet::plan::Plan;
 use ricochet::run::{self, RunResult};
@@ -26,7 +25,7 @@ fn block() -> Scene {
 }
 
 fn run_scene(scene: &Scene, name: &str) -> RunResult {
-    let model = Model::build(scene).unwrap();
+    let model = ricochet::run::model(scene).unwrap();
     let plan = Plan::new(scene, &model);
     let dir = tmp_dir(name);
     let mut solver = CpuSolver::new(model.clone(), plan.clone(), run::schedule(scene));

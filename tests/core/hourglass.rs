@@ -134,7 +134,7 @@ fn run_mode(
     let v0 = 1.0;
     let text = scene_text(form, coefficient, dt, steps);
     let scene: Scene = parse(&text);
-    let mut model = Model::build(&scene).unwrap();
+    let mut model = ricochet::run::model(&scene).unwrap();
     for i in 0..model.node_count() {
         model.velocity[i] = [v0 * checker(i), 0.0];
     }

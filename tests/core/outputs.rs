@@ -7,7 +7,6 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use ricochet::model::Model;
 use ricochet::plan::{Plan, Stage};
 use ricochet::scene::Scene;
 use serde_json::Value;
@@ -220,7 +219,7 @@ fn end_time_override_and_check() {
 fn plan_has_only_the_stages_a_scene_needs() {
     let plan = |name: &str| {
         let scene = Scene::load(&asset(name)).unwrap();
-        let model = Model::build(&scene).unwrap();
+        let model = ricochet::run::model(&scene).unwrap();
         Plan::new(&scene, &model).stages
     };
     use Stage::*;

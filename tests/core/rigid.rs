@@ -7,7 +7,6 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
-use ricochet::model::Model;
 use ricochet::output::fields::element_fields;
 use ricochet::plan::Plan;
 use ricochet::scene::{Formulation, HourglassForm, MaterialModel, Scene};
@@ -233,7 +232,7 @@ fn asset(name: &str) -> Scene {
 #[test]
 fn spinning_neo_hookean_disk_stays_nearly_stress_free() {
     let scene = asset("spinning_disk.toml");
-    let model = Model::build(&scene).unwrap();
+    let model = ricochet::run::model(&scene).unwrap();
     let plan = Plan::new(&scene, &model);
     let body = &scene.bodies[0];
     let mat = &scene.materials[body.material];

@@ -16,7 +16,7 @@ use serde_json::Value;
 use crate::common::*;
 
 #[path = "../shared/penetration.rs"]
-mod penetration;
+pub(crate) mod penetration;
 use penetration::interpenetration;
 
 const C_BAR: f64 = 5172.19; // sqrt(E / rho) of steel (m/s)

@@ -24,8 +24,7 @@ fn every_case_file_parses_and_expands_into_a_valid_scene_at_every_level() {
                 let text = c.expand(level, method).expect("expands");
                 let scene = ricochet::scene::Scene::parse(&text, &c.file)
                     .unwrap_or_else(|e| panic!("{}: {e}", c.case.name));
-                ricochet::model::Model::build(&scene)
-                    .unwrap_or_else(|e| panic!("{}: {e}", c.case.name));
+                ricochet::run::model(&scene).unwrap_or_else(|e| panic!("{}: {e}", c.case.name));
             }
         }
     }

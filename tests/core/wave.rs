@@ -15,7 +15,6 @@
 
 use std::f64::consts::PI;
 
-use ricochet::model::Model;
 use ricochet::output::fields::element_fields;
 use ricochet::plan::Plan;
 
@@ -77,7 +76,7 @@ fn measured_phase_error(ppw: usize, c_number: f64, hourglass: &str) -> f64 {
     let steps = 300;
     let text = rod_scene(ppw, c_number, steps, hourglass, false);
     let scene = parse(&text);
-    let mut model = Model::build(&scene).unwrap();
+    let mut model = ricochet::run::model(&scene).unwrap();
     let k = 2.0 * PI / (ppw as f64 * H);
     let vamp = 1.0;
     let shape: Vec<f64> = model.position.iter().map(|x| (k * x[0]).cos()).collect();
@@ -216,7 +215,7 @@ fn step_pulse(c_number: f64, hourglass: &str) -> Pulse {
     let dt = c_number * H / c;
     let steps = (1.75 * len / c / dt).ceil() as usize;
     let scene = parse(&rod_scene(cells, c_number, steps, hourglass, true));
-    let model = Model::build(&scene).unwrap();
+    let model = ricochet::run::model(&scene).unwrap();
     assert_eq!(
         model.constraints.len(),
         2,

@@ -46,3 +46,25 @@ pub fn interpenetration(model: &Model, u: &[[f64; 2]]) -> f64 {
     }
     worst
 }
+
+/// The deepest any node of body `body` lies inside one of that body's own elements that does not
+/// hold it (deformed): a surface passed through itself.
+#[allow(dead_code)]
+pub fn self_penetration(model: &Model, u: &[[f64; 2]], body: usize) -> f64 {
+    let b = &model.bodies[body];
+    let mut worst: f64 = 0.0;
+    for e in b.elements.clone() {
+        let x = corners(model, u, e);
+        for n in b.nodes.clone() {
+            if model.quads[e].contains(&(n as u32)) {
+                continue;
+            }
+            let p = [
+                model.position[n][0] + u[n][0],
+                model.position[n][1] + u[n][1],
+            ];
+            worst = worst.max(inside_depth(&x, p));
+        }
+    }
+    worst
+}

@@ -404,7 +404,7 @@ impl ContactState {
         multi: bool,
         alloc: &mut Alloc<'_>,
     ) -> Result<ContactState> {
-        let t = set.tables(model);
+        let t = set.tables();
         let nl = t.nodes.len();
         let c_ref: Vec<[f32; 4]> = t
             .reference

@@ -1,0 +1,235 @@
+//! Building a [`ContactSet`] from a model: the passes of each `[[contact]]` table (a pair's one or
+//! two directions, or a group's one symmetric pass), the walls, the local nodes and masses.
+
+use std::collections::BTreeMap;
+
+use super::report::Interface;
+use super::surface::{self, Surface};
+use super::{ContactSet, Pass, Wall};
+use crate::model::Model;
+use crate::scene::Contact;
+
+/// 2D bulk modulus used by the penalty stiffness: lambda (of the formulation) + mu.
+fn bulk_modulus(model: &Model, body: usize) -> f64 {
+    let p = &model.bodies[body].params;
+    p.lambda_plane + p.mu
+}
+
+fn element_area(model: &Model, e: u32) -> f64 {
+    crate::step::element::quad_geometry(&model.corners[e as usize]).area
+}
+
+/// Surfaces and local node numbering while the set is built.
+struct Builder<'m> {
+    model: &'m Model,
+    surfaces: Vec<Option<Surface>>,
+    local: Vec<u32>,
+    nodes: Vec<u32>,
+    min_length: f64,
+}
+
+impl Builder<'_> {
+    fn surface(&mut self, b: usize) -> Surface {
+        let model = self.model;
+        self.surfaces[b]
+            .get_or_insert_with(|| Surface::of_body(model, b))
+            .clone()
+    }
+
+    /// The local index of global node `g`.
+    fn add(&mut self, g: u32) -> u32 {
+        if self.local[g as usize] == u32::MAX {
+            self.local[g as usize] = self.nodes.len() as u32;
+            self.nodes.push(g);
+        }
+        self.local[g as usize]
+    }
+
+    /// Adds body `b`'s surface nodes to `p` as slaves.
+    fn slaves(&mut self, p: &mut Pass, b: usize) {
+        let ss = self.surface(b);
+        let mut prev = BTreeMap::new();
+        let mut next = BTreeMap::new();
+        for seg in &ss.segments {
+            next.insert(seg.nodes[0], seg.nodes[1]);
+            prev.insert(seg.nodes[1], seg.nodes[0]);
+        }
+        for &g in &ss.nodes {
+            let pg = prev.get(&g).copied().unwrap_or(g);
+            let ng = next.get(&g).copied().unwrap_or(g);
+            let s = self.add(g);
+            let nb = [self.add(pg), self.add(ng)];
+            p.slaves.push(s);
+            p.slave_body.push(b as u32);
+            p.neighbours.push(nb);
+        }
+    }
+
+    /// Adds body `b`'s surface segments to `p` as masters, with `share` of the contact's
+    /// penalty stiffness `scale` K t L^2 / A.
+    fn masters(&mut self, p: &mut Pass, b: usize, share: f64, scale: f64) {
+        let ms = self.surface(b);
+        let k_body = bulk_modulus(self.model, b) * self.model.bodies[b].params.thickness;
+        for s in &ms.segments {
+            let l = surface::length(self.model, s);
+            self.min_length = self.min_length.min(l);
+            p.stiffness
+                .push(share * scale * k_body * l * l / element_area(self.model, s.element));
+            let ab = s.nodes.map(|g| self.add(g));
+            p.segments.push(ab);
+            p.segment_body.push(b as u32);
+        }
+    }
+
+    /// The passes of contact `c` (interface `iface`).
+    fn contact(&mut self, c: &Contact, iface: usize, passes: &mut Vec<Pass>) {
+        let empty = |slave_is_first: bool| Pass {
+            interface: iface,
+            method: c.method,
+            slave_is_first,
+            two_pass: c.two_pass || c.group,
+            group: c.group,
+            self_contact: c.self_contact,
+            slaves: Vec::new(),
+            slave_body: Vec::new(),
+            neighbours: Vec::new(),
+            segments: Vec::new(),
+            segment_body: Vec::new(),
+            stiffness: Vec::new(),
+            candidates: Vec::new(),
+        };
+        if c.group {
+            // One symmetric pass: every node pair is met from both sides, each side with half
+            // the stiffness (as a two-pass contact).
+            let mut p = empty(true);
+            for &b in &c.bodies {
+                self.slaves(&mut p, b);
+            }
+            for &b in &c.bodies {
+                self.masters(&mut p, b, 0.5, c.penalty_scale);
+            }
+            passes.push(p);
+            return;
+        }
+        let (first, second) = (c.bodies[0], c.bodies[1]);
+        let mut dirs = vec![(first, second, true)];
+        if c.two_pass {
+            dirs.push((second, first, false));
+        }
+        // Two passes act on the same node pairs: each carries half the interface stiffness.
+        let share = if c.two_pass { 0.5 } else { 1.0 };
+        for (slave, master, slave_is_first) in dirs {
+            let mut p = empty(slave_is_first);
+            self.masters(&mut p, master, share, c.penalty_scale);
+            self.slaves(&mut p, slave);
+            passes.push(p);
+        }
+    }
+
+    /// Wall `w`'s nodes (every surface node of its bodies) and their penalty stiffness.
+    fn wall(&mut self, w: &crate::scene::RigidWall, iface: usize) -> Wall {
+        let mut nodes = Vec::new();
+        let mut body = Vec::new();
+        let mut stiffness = Vec::new();
+        for &b in &w.bodies {
+            let s = self.surface(b);
+            let k_body = bulk_modulus(self.model, b) * self.model.bodies[b].params.thickness;
+            for &g in &s.nodes {
+                // The node's stiffest adjacent boundary segment.
+                let mut k = 0.0f64;
+                for seg in s.segments.iter().filter(|seg| seg.nodes.contains(&g)) {
+                    let l = surface::length(self.model, seg);
+                    self.min_length = self.min_length.min(l);
+                    k = k.max(l * l / element_area(self.model, seg.element));
+                }
+                nodes.push(self.add(g));
+                body.push(b as u32);
+                stiffness.push(w.penalty_scale * k_body * k);
+            }
+        }
+        Wall {
+            interface: iface,
+            method: w.method,
+            point: w.point,
+            normal: w.normal,
+            nodes,
+            body,
+            stiffness,
+        }
+    }
+}
+
+impl ContactSet {
+    /// The contact state of `model`; `None` when it has no contact or wall.
+    pub fn new(model: &Model) -> Option<ContactSet> {
+        if !model.has_contact() {
+            return None;
+        }
+        let mut bld = Builder {
+            model,
+            surfaces: vec![None; model.bodies.len()],
+            local: vec![u32::MAX; model.node_count()],
+            nodes: Vec::new(),
+            min_length: f64::INFINITY,
+        };
+        let mut interfaces = Vec::new();
+        let mut passes = Vec::new();
+        let mut walls = Vec::new();
+        for c in &model.contacts {
+            let iface = interfaces.len();
+            interfaces.push(Interface::new(&c.name));
+            bld.contact(c, iface, &mut passes);
+        }
+        for w in &model.walls {
+            let iface = interfaces.len();
+            interfaces.push(Interface::new(&w.name));
+            walls.push(bld.wall(w, iface));
+        }
+        let Builder {
+            nodes, min_length, ..
+        } = bld;
+        let mut constrained = vec![[false; 2]; model.node_count()];
+        for c in &model.constraints {
+            constrained[c.node as usize] = [c.vx.is_some(), c.vy.is_some()];
+        }
+        let mass: Vec<f64> = nodes.iter().map(|&g| model.mass[g as usize]).collect();
+        let inv_mass = nodes
+            .iter()
+            .zip(&mass)
+            .map(|(&g, m)| constrained[g as usize].map(|c| if c { 0.0 } else { 1.0 / m }))
+            .collect();
+        let n = nodes.len();
+        let mut set = ContactSet {
+            interfaces,
+            passes,
+            walls,
+            reference: nodes.iter().map(|&g| model.position[g as usize]).collect(),
+            inv_mass,
+            mass,
+            inv_mass_scale: 1.0,
+            warm: Vec::new(),
+            warm_dt: 0.0,
+            v_old: vec![[0.0; 2]; n],
+            x_ref: vec![[0.0; 2]; n],
+            x_n: vec![[0.0; 2]; n],
+            x_tr: vec![[0.0; 2]; n],
+            x_c: vec![[0.0; 2]; n],
+            done: Vec::new(),
+            dt: 0.0,
+            v_free: vec![[0.0; 2]; n],
+            dv: vec![[0.0; 2]; n],
+            nodes,
+            searched: false,
+            margin: if min_length.is_finite() {
+                0.5 * min_length
+            } else {
+                0.0
+            },
+            searches: 0,
+            penalty_step: None,
+            cons: Vec::new(),
+        };
+        set.penalty_step = set.compute_penalty_step();
+        Some(set)
+    }
+}

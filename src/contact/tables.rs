@@ -1,0 +1,221 @@
+//! The contact set as flat, static tables for the GPU kernel ([`Tables`]), and a search in slot
+//! form ([`SearchTables`]: candidates per slot and a colouring).
+
+use super::ContactSet;
+use crate::scene::ContactMethod;
+
+/// A slot of the GPU contact kernel: one pass's slave node or one wall's node.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlotTable {
+    /// Interface (contact or wall) index.
+    pub interface: u32,
+    /// Penalty (else Lagrange).
+    pub penalty: bool,
+    /// A wall's node (else a pass's slave node).
+    pub wall: bool,
+    /// The slave body is the interface's second body (its impulse counts negative).
+    pub second_is_slave: bool,
+    /// Slave node (local index).
+    pub node: u32,
+    /// Neighbours along the slave's surface (passes).
+    pub neighbours: [u32; 2],
+    /// Wall normal and point.
+    pub normal: [f64; 2],
+    /// A point of the wall.
+    pub point: [f64; 2],
+    /// Wall penalty stiffness of the node.
+    pub stiffness: f64,
+    /// The slot's pass (index in pass order), `u32::MAX` for a wall.
+    pub pass: u32,
+    /// The slave node's body (for a wall, the node's body).
+    pub body: u32,
+    /// The pass is a group: the impulse's sign on the interface's first body follows the body
+    /// order (+1 when this slot's body is below the segment's, -1 above, 0 equal).
+    pub group: bool,
+    /// The pass admits self-contact (see [`super::narrow::admissible`]).
+    pub self_contact: bool,
+}
+
+/// A master segment of the GPU contact kernel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentTable {
+    /// Local nodes a -> b (the body on the left).
+    pub nodes: [u32; 2],
+    /// Penalty stiffness.
+    pub stiffness: f64,
+    /// The segment's pass (index in pass order).
+    pub pass: u32,
+    /// The segment's body.
+    pub body: u32,
+}
+
+/// The flat, static tables of a contact set, for the GPU kernel.
+#[derive(Debug, Clone)]
+pub struct Tables {
+    /// Global index of each local contact node.
+    pub nodes: Vec<u32>,
+    /// Inverse mass per local node and direction (0 on a constrained direction).
+    pub inv_mass: Vec<[f64; 2]>,
+    /// Mass per local node.
+    pub mass: Vec<f64>,
+    /// Reference (undeformed) position of each local node (for [`super::narrow::admissible`]).
+    pub reference: Vec<[f64; 2]>,
+    /// Slots: every pass's slave nodes in order, then every wall's nodes.
+    pub slots: Vec<SlotTable>,
+    /// Master segments of all passes, in pass order.
+    pub segments: Vec<SegmentTable>,
+    /// Search margin (half the shortest segment).
+    pub margin: f64,
+}
+
+/// The result of a search in slot form: candidate segments per slot (CSR) and a colouring of the
+/// slots such that slots of one colour share no node (through any candidate).
+#[derive(Debug, Clone, Default)]
+pub struct SearchTables {
+    /// Candidate offsets per slot (slots + 1).
+    pub candidate_offsets: Vec<u32>,
+    /// Candidate segments (indices into [`Tables::segments`]).
+    pub candidates: Vec<u32>,
+    /// Slot offsets per colour (colours + 1).
+    pub color_offsets: Vec<u32>,
+    /// Slots in colour order (ascending within a colour).
+    pub color_slots: Vec<u32>,
+}
+
+impl ContactSet {
+    /// The static tables of the GPU kernel.
+    pub fn tables(&self) -> Tables {
+        self.tables_inner()
+    }
+
+    /// Slots of the GPU tables: every pass's slave nodes and every wall's nodes.
+    pub fn slot_count(&self) -> usize {
+        self.passes.iter().map(|p| p.slaves.len()).sum::<usize>()
+            + self.walls.iter().map(|w| w.nodes.len()).sum::<usize>()
+    }
+
+    fn tables_inner(&self) -> Tables {
+        let mut slots = Vec::new();
+        let mut segments = Vec::new();
+        for (pi, p) in self.passes.iter().enumerate() {
+            for (si, &s) in p.slaves.iter().enumerate() {
+                slots.push(SlotTable {
+                    interface: p.interface as u32,
+                    penalty: p.method == ContactMethod::Penalty,
+                    wall: false,
+                    second_is_slave: !p.group && !p.slave_is_first,
+                    node: s,
+                    neighbours: p.neighbours[si],
+                    normal: [0.0; 2],
+                    point: [0.0; 2],
+                    stiffness: 0.0,
+                    pass: pi as u32,
+                    body: p.slave_body[si],
+                    group: p.group,
+                    self_contact: p.self_contact,
+                });
+            }
+            segments.extend(
+                p.segments
+                    .iter()
+                    .zip(&p.stiffness)
+                    .zip(&p.segment_body)
+                    .map(|((&nodes, &stiffness), &body)| SegmentTable {
+                        nodes,
+                        stiffness,
+                        pass: pi as u32,
+                        body,
+                    }),
+            );
+        }
+        for w in &self.walls {
+            for (idx, &l) in w.nodes.iter().enumerate() {
+                slots.push(SlotTable {
+                    interface: w.interface as u32,
+                    penalty: w.method == ContactMethod::Penalty,
+                    wall: true,
+                    second_is_slave: false,
+                    node: l,
+                    neighbours: [l, l],
+                    normal: w.normal,
+                    point: w.point,
+                    stiffness: w.stiffness[idx],
+                    pass: u32::MAX,
+                    body: w.body[idx],
+                    group: false,
+                    self_contact: false,
+                });
+            }
+        }
+        Tables {
+            nodes: self.nodes.clone(),
+            inv_mass: self.inv_mass.clone(),
+            mass: self.mass.clone(),
+            reference: self.reference.clone(),
+            slots,
+            segments,
+            margin: self.margin,
+        }
+    }
+
+    /// Searches with the local nodes at `x_n` (start of the step) and `x_tr` (the free update's
+    /// end), the GPU's way: candidates per slot and a colouring (greedy, in slot order).
+    pub fn search_tables(&mut self, x_n: &[[f64; 2]], x_tr: &[[f64; 2]]) -> SearchTables {
+        self.x_n.copy_from_slice(x_n);
+        self.x_tr.copy_from_slice(x_tr);
+        self.search();
+        let mut t = SearchTables::default();
+        t.candidate_offsets.push(0);
+        // Node sets per slot, for the colouring.
+        let mut touched: Vec<Vec<u32>> = Vec::new();
+        let mut seg_base = 0u32;
+        for p in &self.passes {
+            let mut k = 0;
+            for si in 0..p.slaves.len() as u32 {
+                let mut set = vec![p.slaves[si as usize]];
+                while k < p.candidates.len() && p.candidates[k].0 == si {
+                    let j = p.candidates[k].1;
+                    t.candidates.push(seg_base + j);
+                    set.extend(p.segments[j as usize]);
+                    k += 1;
+                }
+                t.candidate_offsets.push(t.candidates.len() as u32);
+                touched.push(set);
+            }
+            seg_base += p.segments.len() as u32;
+        }
+        for w in &self.walls {
+            for &l in &w.nodes {
+                t.candidate_offsets.push(t.candidates.len() as u32);
+                touched.push(vec![l]);
+            }
+        }
+        // Greedy colouring: the lowest colour no slot sharing a node has taken.
+        let mut used: Vec<Vec<u32>> = vec![Vec::new(); self.nodes.len()];
+        let mut color = vec![0u32; touched.len()];
+        let mut colors = 0u32;
+        for (k, set) in touched.iter().enumerate() {
+            let mut c = 0u32;
+            while set.iter().any(|&n| used[n as usize].contains(&c)) {
+                c += 1;
+            }
+            for &n in set {
+                used[n as usize].push(c);
+            }
+            color[k] = c;
+            colors = colors.max(c + 1);
+        }
+        t.color_offsets.push(0);
+        for c in 0..colors {
+            t.color_slots.extend(
+                color
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &x)| x == c)
+                    .map(|(k, _)| k as u32),
+            );
+            t.color_offsets.push(t.color_slots.len() as u32);
+        }
+        t
+    }
+}
