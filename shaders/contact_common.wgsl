@@ -8,7 +8,8 @@
 // `fws` (vec4<f32>) at the offsets of ContactParams.
 
 const CG: u32 = 64u;                  // threads per workgroup of the per-item contact kernels
-const SG: u32 = 256u;                 // threads of the one-workgroup kernels (scans, one-group solve)
+const RG: u32 = 256u;
+// Threads of the one-workgroup kernels (scans, one-group solve): 64 on CPU adapters (src/gpu/shader.rs).
 const KIND_NONE: u32 = 0u;
 const KIND_LAGRANGE: u32 = 1u;
 const KIND_PENALTY: u32 = 2u;
@@ -59,7 +60,11 @@ struct ContactParams {
     o_lcur: u32,
     o_list: u32,          // slots in colour order
     o_iface: u32,         // first slot of each interface (n_ifaces + 1)
+    o_act: u32,           // the step's Lagrange slots by colour (one-workgroup solve)
+    o_mask: u32,          // colours taken per local node (one-workgroup solve's greedy colouring)
     _p1: u32,
+    _p2: u32,
+    _p3: u32,
     f_box: u32,           // fws offsets: segment boxes
     f_usearch: u32,       // u at the last search per local node (xy)
     f_rp: u32,            // report partials per slot chunk start
@@ -68,7 +73,11 @@ struct ContactParams {
 
 const MAX_COLORS: u32 = 64u;
 
+// The contact state on the device: the parameters (written by the host), then the counters it
+// reads back. The parameters live in a storage buffer, not a uniform one: lavapipe (Mesa 22)
+// recompiles a kernel whose loop bounds read a uniform buffer at every dispatch.
 struct ContactCtl {
+    p: ContactParams,
     due: atomic<u32>,         // a search is due this step
     extent: atomic<u32>,      // f32 bits of the largest segment box side (grid cell size)
     n_cand: atomic<u32>,      // candidates of the last search
@@ -131,7 +140,6 @@ struct Cons {
     dt_warm: f32,         // dt_n of the step that found lambda (Lagrange: the next step's warm start)
 }
 
-@group(0) @binding(0) var<uniform> cp: ContactParams;
 @group(0) @binding(1) var<storage, read_write> ctrl: Control;
 @group(0) @binding(2) var<storage, read_write> nodes: array<vec4<f32>>;   // (u, v)
 @group(0) @binding(3) var<storage, read_write> v_prev: array<vec2<f32>>;

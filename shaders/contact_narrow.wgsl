@@ -132,8 +132,8 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
     var found = false;
     var best: Qual;
     var best_j = 0u;
-    let begin = ws[cp.o_coff + k];
-    let end = ws[cp.o_coff + k + 1u];
+    let begin = ws[cc.p.o_coff + k];
+    let end = ws[cc.p.o_coff + k + 1u];
     for (var q = begin; q < end; q++) {
         let j = grow[q];
         let r = qualify(s, own, j, penalty);
@@ -252,7 +252,7 @@ fn narrow_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
 @compute @workgroup_size(CG)
 fn narrow(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cp.n_slots) {
+    if (!contact_running() || k >= cc.p.n_slots) {
         return;
     }
     let dt = ctrl.dt_next;
@@ -274,14 +274,14 @@ fn narrow(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(CG)
 fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if (!contact_running() || i >= cp.n_local) {
+    if (!contact_running() || i >= cc.p.n_local) {
         return;
     }
     let inv_scale = inv_mass_scale();
     var d = vec2<f32>(0.0);
-    let b = cp.cand_capacity;
-    let end = ws[cp.o_noff + i + 1u];
-    for (var q = ws[cp.o_noff + i]; q < end; q++) {
+    let b = cc.p.cand_capacity;
+    let end = ws[cc.p.o_noff + i + 1u];
+    for (var q = ws[cc.p.o_noff + i]; q < end; q++) {
         let k = grow[b + q];
         let c = cons[k];
         if (c.kind == KIND_NONE || !(c.lambda > 0.0)) {

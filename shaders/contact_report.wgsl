@@ -20,7 +20,7 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocati
         return;
     }
     var work = vec4<f32>(0.0);
-    if (i < cp.n_local) {
+    if (i < cc.p.n_local) {
         let moving = (ctrl.flags & FLAG_END) == 0u;
         let sample = (ctrl.flags & FLAG_SAMPLE) != 0u;
         let dt = ctrl.dt_next;
@@ -56,7 +56,7 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocati
         workgroupBarrier();
     }
     if (l == 0u) {
-        fws[cp.f_wp + wid.x] = sh_f[0];
+        fws[cc.p.f_wp + wid.x] = sh_f[0];
     }
 }
 
@@ -92,14 +92,14 @@ fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
         return;
     }
     let dt = ctrl.dt_next;
-    if (k < cp.n_slots) {
+    if (k < cc.p.n_slots) {
         sh_f[l] = slot_report(k, dt);
     }
     workgroupBarrier();
     if (l != 0u) {
         return;
     }
-    let n = min(CG, cp.n_slots - min(k, cp.n_slots));
+    let n = min(CG, cc.p.n_slots - min(k, cc.p.n_slots));
     var start = k;
     var acc = vec4<f32>(0.0);
     var f = NONE;
@@ -107,7 +107,7 @@ fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
         let fq = interface_of(k + q);
         if (fq != f) {
             if (f != NONE) {
-                fws[cp.f_rp + start] = acc;
+                fws[cc.p.f_rp + start] = acc;
             }
             f = fq;
             start = k + q;
@@ -117,17 +117,17 @@ fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
         acc = vec4<f32>(acc.xyz + r.xyz, max(acc.w, r.w));
     }
     if (f != NONE) {
-        fws[cp.f_rp + start] = acc;
+        fws[cc.p.f_rp + start] = acc;
     }
 }
 
 fn acc_get(f: u32) -> vec4<f32> {
-    let b = cp.row_capacity * cp.hist_stride + 4u * f;
+    let b = cc.p.row_capacity * cc.p.hist_stride + 4u * f;
     return vec4<f32>(c_hist[b], c_hist[b + 1u], c_hist[b + 2u], c_hist[b + 3u]);
 }
 
 fn acc_set(f: u32, a: vec4<f32>) {
-    let b = cp.row_capacity * cp.hist_stride + 4u * f;
+    let b = cc.p.row_capacity * cc.p.hist_stride + 4u * f;
     c_hist[b] = a.x;
     c_hist[b + 1u] = a.y;
     c_hist[b + 2u] = a.z;
@@ -144,14 +144,14 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     }
     let sample = (ctrl.flags & FLAG_SAMPLE) != 0u;
     let dtn = ctrl.dt_node;
-    let row = (ctrl.rows % cp.row_capacity) * cp.hist_stride;
-    for (var f = l; f < cp.n_ifaces; f += CG) {
-        let lo = ws[cp.o_iface + f];
-        let hi = ws[cp.o_iface + f + 1u];
+    let row = (ctrl.rows % cc.p.row_capacity) * cc.p.hist_stride;
+    for (var f = l; f < cc.p.n_ifaces; f += CG) {
+        let lo = ws[cc.p.o_iface + f];
+        let hi = ws[cc.p.o_iface + f + 1u];
         var r = vec4<f32>(0.0);
         var at = lo;
         while (at < hi) {
-            let p = fws[cp.f_rp + at];
+            let p = fws[cc.p.f_rp + at];
             r = vec4<f32>(r.xyz + p.xyz, max(r.w, p.w));
             at = (at / CG + 1u) * CG;
         }
@@ -174,27 +174,27 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
         return;
     }
     var total = vec4<f32>(0.0);
-    let ng = (cp.n_local + CG - 1u) / CG;
+    let ng = (cc.p.n_local + CG - 1u) / CG;
     for (var g = 0u; g < ng; g++) {
-        total += fws[cp.f_wp + g];
+        total += fws[cc.p.f_wp + g];
     }
-    var w = acc_get(cp.n_ifaces);
+    var w = acc_get(cc.p.n_ifaces);
     w.x += total.x;
     w.y = total.y;
-    acc_set(cp.n_ifaces, w);
+    acc_set(cc.p.n_ifaces, w);
     if (sample) {
         c_hist[row] = -(w.x - w.y);
     }
     // Sweeps of this step (per-colour path: the sweeps that ran).
     if (atomicLoad(&cc.lagrange) > 0u) {
         var s = cc.sweeps;
-        if (cp.multi != 0u) {
+        if (cc.p.multi != 0u) {
             s = 0u;
             for (var q = 0u; q < MAX_SWEEP_SLOTS; q++) {
                 s += select(0u, 1u, atomicLoad(&cc.change[q]) != 0u);
             }
-            let last = atomicLoad(&cc.change[cp.max_sweeps - 1u]);
-            if (last != 0u && bitcast<f32>(last) > cp.tolerance) {
+            let last = atomicLoad(&cc.change[cc.p.max_sweeps - 1u]);
+            if (last != 0u && bitcast<f32>(last) > cc.p.tolerance) {
                 cc.unconverged += 1u;
             }
         }

@@ -15,7 +15,7 @@
 @group(0) @binding(14) var<storage, read_write> grow: array<atomic<u32>>;
 @group(1) @binding(0) var<storage, read_write> ind: array<u32>;
 
-var<workgroup> sh_scan: array<u32, SG>;
+var<workgroup> sh_scan: array<u32, RG>;
 var<workgroup> sh_u: u32;
 
 fn wsl(i: u32) -> u32 {
@@ -30,7 +30,7 @@ fn wss(i: u32, v: u32) {
 @compute @workgroup_size(CG)
 fn prep(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if (!contact_running() || i >= cp.n_local) {
+    if (!contact_running() || i >= cc.p.n_local) {
         return;
     }
     let dt = ctrl.dt_next;
@@ -51,10 +51,10 @@ fn prep(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     c_pv[3u * i + 1u] = vec4<f32>(v, vo);
     c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, 0.0, 0.0);
-    let r = fws[cp.f_usearch + i].xy;
+    let r = fws[cc.p.f_usearch + i].xy;
     let d0 = un - r;
     let d1 = ut - r;
-    let h2 = 0.25 * cp.margin * cp.margin;
+    let h2 = 0.25 * cc.p.margin * cc.p.margin;
     if (cc.searches == 0u || dot(d0, d0) > h2 || dot(d1, d1) > h2) {
         atomicOr(&cc.due, 1u);
     }
@@ -79,20 +79,20 @@ fn plan() {
     }
     let due = atomicExchange(&cc.due, 0u) != 0u;
     let f = select(0u, 1u, due);
-    set_ind(0u, f * groups(max(max(cp.n_segs, cp.n_buckets), max(cp.n_local, cp.n_slots))));
-    set_ind(1u, f * groups(cp.n_segs));
+    set_ind(0u, f * groups(max(max(cc.p.n_segs, cc.p.n_buckets), max(cc.p.n_local, cc.p.n_slots))));
+    set_ind(1u, f * groups(cc.p.n_segs));
     set_ind(2u, f);
-    set_ind(3u, f * groups(cp.n_segs));
-    set_ind(4u, f * groups(cp.n_slots));
+    set_ind(3u, f * groups(cc.p.n_segs));
+    set_ind(4u, f * groups(cc.p.n_slots));
     set_ind(5u, f);
-    set_ind(6u, f * groups(cp.n_slots));
-    set_ind(7u, f * groups(cp.n_slots));
+    set_ind(6u, f * groups(cc.p.n_slots));
+    set_ind(7u, f * groups(cc.p.n_slots));
     set_ind(8u, f);
-    set_ind(9u, f * groups(cp.n_slots));
-    set_ind(10u, f * groups(cp.n_local));
-    set_ind(11u, f * groups(cp.n_slots));
-    set_ind(12u, f * groups(cp.n_slots));
-    set_ind(13u, f * groups(cp.n_slots));
+    set_ind(9u, f * groups(cc.p.n_slots));
+    set_ind(10u, f * groups(cc.p.n_local));
+    set_ind(11u, f * groups(cc.p.n_slots));
+    set_ind(12u, f * groups(cc.p.n_slots));
+    set_ind(13u, f * groups(cc.p.n_slots));
     atomicStore(&cc.searching, f);
     if (due) {
         cc.searches += 1u;
@@ -133,7 +133,7 @@ fn cell_of(x: vec2<f32>, h: f32) -> vec2<i32> {
 
 fn bucket(c: vec2<i32>) -> u32 {
     let u = bitcast<vec2<u32>>(c);
-    return ((u.x * 73856093u) ^ (u.y * 19349663u)) & (cp.n_buckets - 1u);
+    return ((u.x * 73856093u) ^ (u.y * 19349663u)) & (cc.p.n_buckets - 1u);
 }
 
 // 2a. Swept boxes of the segments (u_n and the trial u_{n+1}) inflated by the margin, and the
@@ -144,34 +144,34 @@ fn boxes(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (!contact_running()) {
         return;
     }
-    if (i < cp.n_segs) {
+    if (i < cc.p.n_segs) {
         let sg = segs[i];
         let lo = min(min(node_x(sg.a), node_x(sg.b)), min(node_xt(sg.a), node_xt(sg.b)));
         let hi = max(max(node_x(sg.a), node_x(sg.b)), max(node_xt(sg.a), node_xt(sg.b)));
-        let l = lo - cp.margin - pad(lo);
-        let h = hi + cp.margin + pad(hi);
-        fws[cp.f_box + i] = vec4<f32>(l, h);
+        let l = lo - cc.p.margin - pad(lo);
+        let h = hi + cc.p.margin + pad(hi);
+        fws[cc.p.f_box + i] = vec4<f32>(l, h);
         let e = max(h.x - l.x, h.y - l.y);
         atomicMax(&cc.extent, bitcast<u32>(e));
     }
-    if (i < cp.n_buckets) {
-        wss(cp.o_bcount + i, 0u);
+    if (i < cc.p.n_buckets) {
+        wss(cc.p.o_bcount + i, 0u);
     }
-    if (i < cp.n_local) {
-        wss(cp.o_ncount + i, 0u);
-        fws[cp.f_usearch + i] = vec4<f32>(pos(i).zw, 0.0, 0.0);
+    if (i < cc.p.n_local) {
+        wss(cc.p.o_ncount + i, 0u);
+        fws[cc.p.f_usearch + i] = vec4<f32>(pos(i).zw, 0.0, 0.0);
     }
-    if (i < cp.n_slots) {
-        wss(cp.o_color + i, NONE);
+    if (i < cc.p.n_slots) {
+        wss(cc.p.o_color + i, NONE);
     }
     if (i <= MAX_COLORS) {
-        wss(cp.o_lcount + i, 0u);
+        wss(cc.p.o_lcount + i, 0u);
     }
 }
 
 // The distinct buckets of a segment's cells (at most 2 x 2: the cell is the largest box side).
 fn seg_buckets(j: u32, out: ptr<function, array<u32, 4>>) -> u32 {
-    let b = fws[cp.f_box + j];
+    let b = fws[cc.p.f_box + j];
     let h = cell_size();
     let c0 = cell_of(b.xy, h);
     let c1 = cell_of(b.zw, h);
@@ -196,20 +196,20 @@ fn seg_buckets(j: u32, out: ptr<function, array<u32, 4>>) -> u32 {
 @compute @workgroup_size(CG)
 fn seg_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let j = gid.x;
-    if (!contact_running() || j >= cp.n_segs) {
+    if (!contact_running() || j >= cc.p.n_segs) {
         return;
     }
     var bs: array<u32, 4>;
     let n = seg_buckets(j, &bs);
     for (var m = 0u; m < n; m++) {
-        atomicAdd(&ws[cp.o_bcount + bs[m]], 1u);
+        atomicAdd(&ws[cc.p.o_bcount + bs[m]], 1u);
     }
 }
 
 // Exclusive scan of n words at `src` into `dst` (n + 1 words) and a copy at `cur` (if not NONE),
 // in one workgroup, in a fixed order; returns the total.
 fn scan(src: u32, dst: u32, cur: u32, n: u32, l: u32) -> u32 {
-    let per = (n + SG - 1u) / SG;
+    let per = (n + RG - 1u) / RG;
     let begin = min(l * per, n);
     let end = min(begin + per, n);
     var sum = 0u;
@@ -220,7 +220,7 @@ fn scan(src: u32, dst: u32, cur: u32, n: u32, l: u32) -> u32 {
     workgroupBarrier();
     if (l == 0u) {
         var acc = 0u;
-        for (var t = 0u; t < SG; t++) {
+        for (var t = 0u; t < RG; t++) {
             let x = sh_scan[t];
             sh_scan[t] = acc;
             acc += x;
@@ -244,26 +244,26 @@ fn scan(src: u32, dst: u32, cur: u32, n: u32, l: u32) -> u32 {
     return total;
 }
 
-@compute @workgroup_size(SG)
+@compute @workgroup_size(RG)
 fn scan_buckets(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (!running_uniform(lid.x)) {
         return;
     }
-    scan(cp.o_bcount, cp.o_boff, cp.o_bcur, cp.n_buckets, lid.x);
+    scan(cc.p.o_bcount, cc.p.o_boff, cc.p.o_bcur, cc.p.n_buckets, lid.x);
 }
 
 // 2c. Bucket entries (in any order: the slots sort their candidates).
 @compute @workgroup_size(CG)
 fn seg_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     let j = gid.x;
-    if (!contact_running() || j >= cp.n_segs) {
+    if (!contact_running() || j >= cc.p.n_segs) {
         return;
     }
     var bs: array<u32, 4>;
     let n = seg_buckets(j, &bs);
     for (var m = 0u; m < n; m++) {
-        let at = atomicAdd(&ws[cp.o_bcur + bs[m]], 1u);
-        wss(cp.o_bent + at, j);
+        let at = atomicAdd(&ws[cc.p.o_bcur + bs[m]], 1u);
+        wss(cc.p.o_bent + at, j);
     }
 }
 
@@ -313,10 +313,10 @@ fn visit(k: u32, mode: u32, at: u32) -> u32 {
     for (var y = c0.y; y <= c1.y; y++) {
         for (var x = c0.x; x <= c1.x; x++) {
             let bk = bucket(vec2<i32>(x, y));
-            let end = wsl(cp.o_boff + bk + 1u);
-            for (var e = wsl(cp.o_boff + bk); e < end; e++) {
-                let j = wsl(cp.o_bent + e);
-                let bx = fws[cp.f_box + j];
+            let end = wsl(cc.p.o_boff + bk + 1u);
+            for (var e = wsl(cc.p.o_boff + bk); e < end; e++) {
+                let j = wsl(cc.p.o_bent + e);
+                let bx = fws[cc.p.f_box + j];
                 // Overlap, counted once: at the lowest cell common to both boxes.
                 if (any(bx.xy > hi) || any(bx.zw < lo)) {
                     continue;
@@ -349,24 +349,24 @@ fn visit(k: u32, mode: u32, at: u32) -> u32 {
 @compute @workgroup_size(CG)
 fn slot_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cp.n_slots) {
+    if (!contact_running() || k >= cc.p.n_slots) {
         return;
     }
-    wss(cp.o_ccount + k, visit(k, 0u, 0u));
+    wss(cc.p.o_ccount + k, visit(k, 0u, 0u));
 }
 
 // 2e. Candidate offsets; a search that does not fit stops the step for the host to grow the buffer.
-@compute @workgroup_size(SG)
+@compute @workgroup_size(RG)
 fn scan_slots(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
     if (!running_uniform(l)) {
         return;
     }
-    let total = scan(cp.o_ccount, cp.o_coff, NONE, cp.n_slots, l);
+    let total = scan(cc.p.o_ccount, cc.p.o_coff, NONE, cc.p.n_slots, l);
     if (l == 0u) {
         atomicStore(&cc.n_cand, total);
         // The node adjacency: each slot's slave and its candidates' nodes.
-        if (total > cp.cand_capacity || cp.n_slots + 2u * total > cp.adj_capacity) {
+        if (total > cc.p.cand_capacity || cc.p.n_slots + 2u * total > cc.p.adj_capacity) {
             cc.need_cand = total;
             atomicOr(&cc.grow, GROW_CANDIDATES);
             ctrl.state = STATE_SEARCH_GROW;
@@ -378,10 +378,10 @@ fn scan_slots(@builtin(local_invocation_id) lid: vec3<u32>) {
 @compute @workgroup_size(CG)
 fn slot_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cp.n_slots) {
+    if (!contact_running() || k >= cc.p.n_slots) {
         return;
     }
-    visit(k, 1u, wsl(cp.o_coff + k));
+    visit(k, 1u, wsl(cc.p.o_coff + k));
 }
 
 // The nodes a slot can touch: its slave, then its candidates' nodes (a node may repeat).
@@ -389,13 +389,13 @@ fn touched(k: u32, m: u32) -> u32 {
     if (m == 0u) {
         return slots[k].s;
     }
-    let j = atomicLoad(&grow[wsl(cp.o_coff + k) + (m - 1u) / 2u]);
+    let j = atomicLoad(&grow[wsl(cc.p.o_coff + k) + (m - 1u) / 2u]);
     let sg = segs[j];
     return select(sg.b, sg.a, (m & 1u) == 1u);
 }
 
 fn n_touched(k: u32) -> u32 {
-    return 1u + 2u * (wsl(cp.o_coff + k + 1u) - wsl(cp.o_coff + k));
+    return 1u + 2u * (wsl(cc.p.o_coff + k + 1u) - wsl(cc.p.o_coff + k));
 }
 
 // Whether the m-th touched node of slot k already appeared before it.
@@ -412,24 +412,24 @@ fn repeated(k: u32, m: u32, i: u32) -> bool {
 @compute @workgroup_size(CG)
 fn adj_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cp.n_slots) {
+    if (!contact_running() || k >= cc.p.n_slots) {
         return;
     }
     let nt = n_touched(k);
     for (var m = 0u; m < nt; m++) {
         let i = touched(k, m);
         if (!repeated(k, m, i)) {
-            atomicAdd(&ws[cp.o_ncount + i], 1u);
+            atomicAdd(&ws[cc.p.o_ncount + i], 1u);
         }
     }
 }
 
-@compute @workgroup_size(SG)
+@compute @workgroup_size(RG)
 fn scan_nodes(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (!running_uniform(lid.x)) {
         return;
     }
-    let total = scan(cp.o_ncount, cp.o_noff, cp.o_ncur, cp.n_local, lid.x);
+    let total = scan(cc.p.o_ncount, cc.p.o_noff, cc.p.o_ncur, cc.p.n_local, lid.x);
     if (lid.x == 0u) {
         cc.n_adj = total;
     }
@@ -439,15 +439,15 @@ fn scan_nodes(@builtin(local_invocation_id) lid: vec3<u32>) {
 @compute @workgroup_size(CG)
 fn adj_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cp.n_slots) {
+    if (!contact_running() || k >= cc.p.n_slots) {
         return;
     }
     let nt = n_touched(k);
     for (var m = 0u; m < nt; m++) {
         let i = touched(k, m);
         if (!repeated(k, m, i)) {
-            let at = atomicAdd(&ws[cp.o_ncur + i], 1u);
-            atomicStore(&grow[cp.cand_capacity + at], k);
+            let at = atomicAdd(&ws[cc.p.o_ncur + i], 1u);
+            atomicStore(&grow[cc.p.cand_capacity + at], k);
         }
     }
 }
@@ -455,11 +455,11 @@ fn adj_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(CG)
 fn adj_sort(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if (!contact_running() || i >= cp.n_local) {
+    if (!contact_running() || i >= cc.p.n_local) {
         return;
     }
-    let b = cp.cand_capacity + wsl(cp.o_noff + i);
-    let n = wsl(cp.o_noff + i + 1u) - wsl(cp.o_noff + i);
+    let b = cc.p.cand_capacity + wsl(cc.p.o_noff + i);
+    let n = wsl(cc.p.o_noff + i + 1u) - wsl(cc.p.o_noff + i);
     for (var p = 1u; p < n; p++) {
         let x = atomicLoad(&grow[b + p]);
         var q = p;
@@ -487,22 +487,22 @@ fn outranks(j: u32, k: u32) -> bool {
 // uncoloured at the start of the round takes colour r. A neighbour coloured in this round reads
 // as r, i.e. still uncoloured at the start: the outcome does not depend on thread order.
 fn jp_round(k: u32, r: u32) {
-    if (wsl(cp.o_color + k) != NONE) {
+    if (wsl(cc.p.o_color + k) != NONE) {
         return;
     }
     let nt = n_touched(k);
     for (var m = 0u; m < nt; m++) {
         let i = touched(k, m);
-        let b = cp.cand_capacity + wsl(cp.o_noff + i);
-        let n = wsl(cp.o_noff + i + 1u) - wsl(cp.o_noff + i);
+        let b = cc.p.cand_capacity + wsl(cc.p.o_noff + i);
+        let n = wsl(cc.p.o_noff + i + 1u) - wsl(cc.p.o_noff + i);
         for (var q = 0u; q < n; q++) {
             let j = atomicLoad(&grow[b + q]);
-            if (j != k && wsl(cp.o_color + j) >= r && outranks(j, k)) {
+            if (j != k && wsl(cc.p.o_color + j) >= r && outranks(j, k)) {
                 return;
             }
         }
     }
-    wss(cp.o_color + k, r);
+    wss(cc.p.o_color + k, r);
     atomicMax(&cc.n_colors, r + 1u);
 }
 
@@ -510,7 +510,7 @@ fn jp_round(k: u32, r: u32) {
 @compute @workgroup_size(CG)
 fn color_round(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cp.n_slots) {
+    if (!contact_running() || k >= cc.p.n_slots) {
         return;
     }
     jp_round(k, round_index.x);
@@ -520,20 +520,20 @@ fn color_round(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(CG)
 fn list_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cp.n_slots) {
+    if (!contact_running() || k >= cc.p.n_slots) {
         return;
     }
-    let c = wsl(cp.o_color + k);
+    let c = wsl(cc.p.o_color + k);
     if (c == NONE) {
         atomicOr(&cc.grow, GROW_ROUNDS);
     } else {
-        atomicAdd(&ws[cp.o_lcount + c], 1u);
+        atomicAdd(&ws[cc.p.o_lcount + c], 1u);
     }
 }
 
 // Colour offsets and the per-colour dispatch sizes (indirect entries 14 + c); a direct dispatch
 // (it writes the indirect sizes), idle when no search ran this step.
-@compute @workgroup_size(SG)
+@compute @workgroup_size(RG)
 fn scan_lists(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
     if (l == 0u) {
@@ -542,17 +542,17 @@ fn scan_lists(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (workgroupUniformLoad(&sh_u) == 0u) {
         return;
     }
-    scan(cp.o_lcount, cp.o_loff, cp.o_lcur, MAX_COLORS, l);
+    scan(cc.p.o_lcount, cc.p.o_loff, cc.p.o_lcur, MAX_COLORS, l);
     if (l == 0u) {
         let nc = atomicLoad(&cc.n_colors);
-        if (atomicLoad(&cc.grow) != 0u || (cp.multi != 0u && nc > cp.colors_recorded)) {
-            if (cp.multi != 0u && nc > cp.colors_recorded) {
+        if (atomicLoad(&cc.grow) != 0u || (cc.p.multi != 0u && nc > cc.p.colors_recorded)) {
+            if (cc.p.multi != 0u && nc > cc.p.colors_recorded) {
                 atomicOr(&cc.grow, GROW_COLORS);
             }
             ctrl.state = STATE_SEARCH_GROW;
         }
         for (var c = 0u; c < MAX_COLORS; c++) {
-            set_ind(14u + c, groups(wsl(cp.o_lcount + c)));
+            set_ind(14u + c, groups(wsl(cc.p.o_lcount + c)));
         }
     }
 }
@@ -560,10 +560,10 @@ fn scan_lists(@builtin(local_invocation_id) lid: vec3<u32>) {
 @compute @workgroup_size(CG)
 fn list_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cp.n_slots) {
+    if (!contact_running() || k >= cc.p.n_slots) {
         return;
     }
-    let c = wsl(cp.o_color + k);
-    let at = atomicAdd(&ws[cp.o_lcur + c], 1u);
-    wss(cp.o_list + at, k);
+    let c = wsl(cc.p.o_color + k);
+    let at = atomicAdd(&ws[cc.p.o_lcur + c], 1u);
+    wss(cc.p.o_list + at, k);
 }

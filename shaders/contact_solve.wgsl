@@ -1,7 +1,7 @@
 // The diagonal-mass Lagrange correction (CPU reference: crate::contact solve, ContactSet::sweep
 // and ::recheck): projected Gauss-Seidel sweeps over the colours of the last search (slots of one
 // colour share no node, so a colour is updated in parallel with the result of a sequential sweep:
-// deterministic), until no gap changes by more than cp.tolerance or cp.max_sweeps; then the
+// deterministic), until no gap changes by more than cc.p.tolerance or cc.p.max_sweeps; then the
 // active-set update (free Lagrange slots re-checked at the corrected positions, more sweeps when
 // any penetrates), ACTIVE_SET_ROUNDS rounds at most. Compiled after contact_narrow.wgsl.
 //
@@ -11,19 +11,21 @@
 
 const ACTIVE_SET_ROUNDS: u32 = 4u;    // crate::contact::ACTIVE_SET_ROUNDS
 
-var<workgroup> sh_m: array<f32, SG>;
+var<workgroup> sh_m: array<f32, RG>;
 var<workgroup> sh_w: u32;
 var<workgroup> sh_nc: u32;
+var<workgroup> sh_off: array<u32, 34>;   // colour offsets of the compacted slots (SERIAL + 2)
+var<workgroup> sh_max: atomic<u32>;
 
 // Whether any invocation's `x` is positive, as a workgroup-uniform value: a tree over sh_m with
 // barriers, written by invocation 0 into a plain workgroup word. (Every exit of the solve loops
-// is decided this way, never by a uniform load of a workgroup atomic: with the old single kernel
-// on lavapipe the invocations disagreed about such a load, left the loops at different barriers,
-// and the step lost its contact impulses.)
+// is decided this way or by a plain word written by invocation 0, never by a uniform load of a
+// workgroup atomic: with the old single kernel on lavapipe the invocations disagreed about such
+// a load, left the loops at different barriers, and the step lost its contact impulses.)
 fn any_positive(l: u32, x: f32) -> bool {
     sh_m[l] = x;
     workgroupBarrier();
-    for (var h = SG / 2u; h > 0u; h >>= 1u) {
+    for (var h = RG / 2u; h > 0u; h >>= 1u) {
         if (l < h) {
             sh_m[l] = max(sh_m[l], sh_m[l + h]);
         }
@@ -36,31 +38,126 @@ fn any_positive(l: u32, x: f32) -> bool {
 }
 
 fn list_begin(c: u32) -> u32 {
-    return ws[cp.o_loff + c];
+    return ws[cc.p.o_loff + c];
 }
 
 fn list_end(c: u32) -> u32 {
-    return ws[cp.o_loff + c + 1u];
+    return ws[cc.p.o_loff + c + 1u];
 }
 
-// Sweeps in one workgroup; returns the sweeps taken.
-fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
+// Colours of the one-workgroup solve: at most 32 by node masks, then one serial colour.
+const SERIAL: u32 = 32u;
+
+fn take_mask(i: u32, c: u32) {
+    if (i != NONE) {
+        ws[cc.p.o_mask + i] |= 1u << c;
+    }
+}
+
+fn mask_of(i: u32) -> u32 {
+    if (i == NONE) {
+        return 0u;
+    }
+    return ws[cc.p.o_mask + i];
+}
+
+fn clear_mask(i: u32) {
+    if (i != NONE) {
+        ws[cc.p.o_mask + i] = 0u;
+    }
+}
+
+// The step's Lagrange constraints coloured greedily in slot order by their own nodes (slave and
+// segment ends), as on the CPU reference's search, and gathered by colour into ws[o_act..]
+// (sh_off: offsets): sequential in invocation 0, so the same on every run. A constraint that
+// finds all 32 colours taken goes to the serial colour, which invocation 0 sweeps alone.
+fn compact(l: u32) {
     if (l == 0u) {
-        sh_nc = atomicLoad(&cc.n_colors);
+        var count: array<u32, 33>;
+        for (var c = 0u; c <= SERIAL; c++) {
+            count[c] = 0u;
+        }
+        for (var k = 0u; k < cc.p.n_slots; k++) {
+            let c = cons[k];
+            if (c.kind != KIND_LAGRANGE) {
+                continue;
+            }
+            let s = slots[k].s;
+            let used = mask_of(s) | mask_of(c.a) | mask_of(c.b);
+            var col = SERIAL;
+            if (used != 0xffffffffu) {
+                col = firstTrailingBit(~used);
+                take_mask(s, col);
+                take_mask(c.a, col);
+                take_mask(c.b, col);
+            }
+            ws[cc.p.o_color + k] = col;
+            count[col] += 1u;
+        }
+        var acc = 0u;
+        for (var c = 0u; c <= SERIAL; c++) {
+            sh_off[c] = acc;
+            acc += count[c];
+            count[c] = 0u;
+        }
+        sh_off[SERIAL + 1u] = acc;
+        for (var k = 0u; k < cc.p.n_slots; k++) {
+            let c = cons[k];
+            if (c.kind != KIND_LAGRANGE) {
+                continue;
+            }
+            let col = ws[cc.p.o_color + k];
+            ws[cc.p.o_act + sh_off[col] + count[col]] = k;
+            count[col] += 1u;
+            clear_mask(slots[k].s);
+            clear_mask(c.a);
+            clear_mask(c.b);
+        }
+    }
+    storageBarrier();
+    workgroupBarrier();
+}
+
+// Sweeps in one workgroup over the compacted Lagrange slots; returns the sweeps taken.
+fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
+    compact(l);
+    if (l == 0u) {
+        var nc = 0u;
+        for (var c = 0u; c < SERIAL; c++) {
+            if (sh_off[c + 1u] > sh_off[c]) {
+                nc = c + 1u;
+            }
+        }
+        sh_nc = nc;
     }
     let nc = workgroupUniformLoad(&sh_nc);
     var taken = 0u;
-    for (var sweep = 0u; sweep < cp.max_sweeps; sweep++) {
+    for (var sweep = 0u; sweep < cc.p.max_sweeps; sweep++) {
+        if (l == 0u) {
+            atomicStore(&sh_max, 0u);
+        }
         var change = 0.0;
         for (var col = 0u; col < nc; col++) {
-            let end = list_end(col);
-            for (var q = list_begin(col) + l; q < end; q += SG) {
-                change = max(change, pgs_update(ws[cp.o_list + q], dt, inv_scale));
+            let end = sh_off[col + 1u];
+            for (var q = sh_off[col] + l; q < end; q += RG) {
+                change = max(change, pgs_update(ws[cc.p.o_act + q], dt, inv_scale));
             }
             storageBarrier();
         }
+        if (l == 0u) {
+            for (var q = sh_off[SERIAL]; q < sh_off[SERIAL + 1u]; q++) {
+                change = max(change, pgs_update(ws[cc.p.o_act + q], dt, inv_scale));
+            }
+        }
         taken += 1u;
-        if (!any_positive(l, change - cp.tolerance)) {
+        // The largest change by an integer atomic on its bits (non-negative floats order as
+        // their bits): one barrier, the same result in any order.
+        atomicMax(&sh_max, bitcast<u32>(change));
+        workgroupBarrier();
+        if (l == 0u) {
+            sh_w = select(0u, 1u, bitcast<f32>(atomicLoad(&sh_max)) > cc.p.tolerance);
+        }
+        if (workgroupUniformLoad(&sh_w) == 0u) {
             return taken;
         }
     }
@@ -90,7 +187,7 @@ fn recheck_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> bool {
     return true;
 }
 
-@compute @workgroup_size(SG)
+@compute @workgroup_size(RG)
 fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
     if (!running_uniform(l)) {
@@ -108,7 +205,7 @@ fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     var taken = sweeps_one(l, dt, inv_scale);
     for (var round = 0u; round < ACTIVE_SET_ROUNDS; round++) {
         var added = 0.0;
-        for (var k = l; k < cp.n_slots; k += SG) {
+        for (var k = l; k < cc.p.n_slots; k += RG) {
             if (recheck_slot(k, dt, dtn, inv_scale)) {
                 added = 1.0;
             }
@@ -132,11 +229,11 @@ fn sweep_runs(q: u32) -> bool {
     if (q == 0u) {
         return atomicLoad(&cc.lagrange) > 0u;
     }
-    if (q % cp.max_sweeps == 0u) {
-        return atomicLoad(&cc.added[q / cp.max_sweeps - 1u]) > 0u;
+    if (q % cc.p.max_sweeps == 0u) {
+        return atomicLoad(&cc.added[q / cc.p.max_sweeps - 1u]) > 0u;
     }
     let prev = atomicLoad(&cc.change[q - 1u]);
-    return prev != 0u && bitcast<f32>(prev) > cp.tolerance;
+    return prev != 0u && bitcast<f32>(prev) > cc.p.tolerance;
 }
 
 @compute @workgroup_size(CG)
@@ -153,7 +250,7 @@ fn sweep_color(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (at >= list_end(col)) {
         return;
     }
-    let change = pgs_update(ws[cp.o_list + at], ctrl.dt_next, inv_mass_scale());
+    let change = pgs_update(ws[cc.p.o_list + at], ctrl.dt_next, inv_mass_scale());
     // Mark the sweep as run (a tiny positive change) even when nothing changed here.
     atomicMax(&cc.change[q], bitcast<u32>(max(change, 1e-30)));
 }
@@ -166,12 +263,12 @@ fn recheck(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let r = round_index.x;
-    let q0 = r * cp.max_sweeps;
+    let q0 = r * cc.p.max_sweeps;
     if (atomicLoad(&cc.change[q0]) == 0u) {
         return;
     }
     let k = gid.x;
-    if (k < cp.n_slots && recheck_slot(k, ctrl.dt_next, ctrl.dt_node, inv_mass_scale())) {
+    if (k < cc.p.n_slots && recheck_slot(k, ctrl.dt_next, ctrl.dt_node, inv_mass_scale())) {
         atomicAdd(&cc.added[r], 1u);
     }
 }

@@ -226,6 +226,7 @@ impl ContactSet {
                 0.0
             },
             searches: 0,
+            sweep_stats: Default::default(),
             penalty_step: None,
             cons: Vec::new(),
         };

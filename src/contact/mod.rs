@@ -42,7 +42,7 @@ use crate::scene::ContactMethod;
 
 pub use overlap::Overlap;
 pub use report::ContactSample;
-pub use solve::{penalty_impulse, ACTIVE_SET_ROUNDS, MAX_SWEEPS, SWEEP_TOLERANCE};
+pub use solve::{penalty_impulse, SweepStats, ACTIVE_SET_ROUNDS, MAX_SWEEPS, SWEEP_TOLERANCE};
 pub use tables::{SearchTables, SegmentTable, SlotTable, Tables};
 
 use report::Interface;
@@ -169,6 +169,7 @@ pub struct ContactSet {
     searched: bool,
     margin: f64,
     searches: u64,
+    sweep_stats: solve::SweepStats,
     penalty_step: Option<(f64, String)>,
     // Scratch.
     x_n: Vec<[f64; 2]>,
@@ -198,6 +199,11 @@ impl ContactSet {
     /// Broad-phase searches so far.
     pub fn searches(&self) -> u64 {
         self.searches
+    }
+
+    /// The Lagrange sweeps so far.
+    pub fn sweep_stats(&self) -> solve::SweepStats {
+        self.sweep_stats
     }
 
     /// Keeps v^{n-1/2} of the contact nodes (call before the node update).

@@ -13,6 +13,32 @@ pub const SWEEP_TOLERANCE: f64 = 1e-13;
 /// corrected positions, each followed by sweeps when it adds constraints).
 pub const ACTIVE_SET_ROUNDS: usize = 4;
 
+/// Projected Gauss-Seidel sweeps of the Lagrange correction over a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SweepStats {
+    /// Sweeps of the current step.
+    pub step: u64,
+    /// Sweeps over the steps with Lagrange constraints.
+    pub total: u64,
+    /// Most sweeps in one step.
+    pub max: u64,
+    /// Steps with Lagrange constraints.
+    pub steps: u64,
+    /// Solves that reached [`MAX_SWEEPS`] (the last sweep ran, converged or not).
+    pub unconverged: u64,
+}
+
+impl SweepStats {
+    /// Mean sweeps per step with Lagrange constraints (0 without).
+    pub fn mean(&self) -> f64 {
+        if self.steps > 0 {
+            self.total as f64 / self.steps as f64
+        } else {
+            0.0
+        }
+    }
+}
+
 impl ContactSet {
     /// The stable step the penalty springs alone allow, 2 / omega with
     /// omega^2 = k (1/m_slave + 1/m_master), and what sets it; `None` without penalty contact.
@@ -118,6 +144,7 @@ impl ContactSet {
             }
         }
         if self.cons.len() > n_pen {
+            self.sweep_stats.step = 0;
             self.sweep();
             // Active-set update: the sweeps move master nodes, which can carry a segment onto
             // a slave node that was free at the trial positions (a node beside a dent, or at
@@ -132,6 +159,10 @@ impl ContactSet {
                 }
                 self.sweep();
             }
+            let s = &mut self.sweep_stats;
+            s.total += s.step;
+            s.max = s.max.max(s.step);
+            s.steps += 1;
         }
         self.warm.clear();
         for c in &self.cons {
@@ -148,7 +179,11 @@ impl ContactSet {
     pub(super) fn sweep(&mut self) {
         let tol = SWEEP_TOLERANCE * self.margin.max(f64::MIN_POSITIVE);
         let dt = self.dt;
-        for _ in 0..MAX_SWEEPS {
+        for sweep in 0..MAX_SWEEPS {
+            self.sweep_stats.step += 1;
+            if sweep + 1 == MAX_SWEEPS {
+                self.sweep_stats.unconverged += 1;
+            }
             let mut change: f64 = 0.0;
             for k in 0..self.cons.len() {
                 let c = self.cons[k];

@@ -286,7 +286,7 @@ impl GpuSolver {
         if let Some(c) = &self.state.contact {
             enc.copy_buffer_to_buffer(
                 &c.ctl,
-                0,
+                super::contact::PARAMS_SIZE,
                 &self.readback,
                 self.counters_at,
                 std::mem::size_of::<ContactCounters>() as u64,

@@ -538,8 +538,16 @@ impl CpuSolver {
 
 impl Solver for CpuSolver {
     fn counters(&self) -> crate::step::Counters {
+        let s = self
+            .contact
+            .as_ref()
+            .map(|c| c.sweep_stats())
+            .unwrap_or_default();
         crate::step::Counters {
             contact_searches: self.contact.as_ref().map_or(0, |c| c.searches()),
+            contact_sweeps_mean: s.mean(),
+            contact_sweeps_max: s.max,
+            contact_unconverged: s.unconverged,
             ..Default::default()
         }
     }

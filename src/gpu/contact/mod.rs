@@ -91,7 +91,11 @@ pub struct ContactParams {
     pub o_lcur: u32,
     pub o_list: u32,
     pub o_iface: u32,
+    pub o_act: u32,
+    pub o_mask: u32,
     pub _p1: u32,
+    pub _p2: u32,
+    pub _p3: u32,
     pub f_box: u32,
     pub f_usearch: u32,
     pub f_rp: u32,
@@ -120,8 +124,10 @@ pub struct ContactCounters {
     pub unconverged: u32,
 }
 
-/// Bytes of WGSL `ContactCtl`.
-pub const CTL_SIZE: u64 = 64 + 4 * MAX_SWEEP_SLOTS as u64 + 16;
+/// Bytes of WGSL `ContactParams`, at the start of `ContactCtl`.
+pub const PARAMS_SIZE: u64 = std::mem::size_of::<ContactParams>() as u64;
+/// Bytes of WGSL `ContactCtl`: the parameters, the counters, the per-sweep changes.
+pub const CTL_SIZE: u64 = PARAMS_SIZE + 64 + 4 * MAX_SWEEP_SLOTS as u64 + 16;
 
 /// Mirror of WGSL `Slot`.
 #[repr(C)]
@@ -154,7 +160,7 @@ pub struct GpuSegment {
 /// Size of WGSL `Cons` (scratch only).
 pub const CONS_SIZE: u64 = 48;
 
-const _: () = assert!(std::mem::size_of::<ContactParams>() == 144);
+const _: () = assert!(std::mem::size_of::<ContactParams>() == 160);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuSlot>() == 48);
 const _: () = assert!(std::mem::size_of::<GpuSegment>() == 32);
@@ -218,7 +224,7 @@ pub fn stage_source(parts: &[&str], features: Features) -> String {
 impl ContactKernels {
     /// Compiles the contact kernels.
     pub fn new(device: &wgpu::Device, features: Features) -> Self {
-        let mut entries = vec![uniform_entry(0, false)];
+        let mut entries = Vec::new();
         entries.extend((1..=16).filter(|&b| b != 10).map(storage_entry));
         entries.push(uniform_entry(17, true));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -318,6 +324,8 @@ fn layout_workspace(p: &mut ContactParams) -> Workspace {
     p.o_lcur = take(nc + 1);
     p.o_list = take(ns);
     p.o_iface = take(p.n_ifaces + 1);
+    p.o_act = take(ns);
+    p.o_mask = take(nl);
     let words = at;
     let mut f = 0u32;
     let mut ftake = |n: u32| {
@@ -344,7 +352,6 @@ pub struct ContactState {
     pub names: Vec<String>,
     /// Counters as last read back.
     pub counters: ContactCounters,
-    params_buf: wgpu::Buffer,
     pub(crate) ctl: wgpu::Buffer,
     grow_buf: wgpu::Buffer,
     pub(crate) history: wgpu::Buffer,
@@ -387,7 +394,7 @@ fn make_bind(
 
 /// Whether the per-colour path is used for `slots` slots on an adapter of `device_type`.
 pub fn multi_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
-    std::env::var("RICOCHET_FORCE_MULTI").is_ok() || (device_type != wgpu::DeviceType::Cpu && slots >= solve::MULTI_SLOTS)
+    device_type != wgpu::DeviceType::Cpu && slots >= solve::MULTI_SLOTS
 }
 
 impl ContactState {
@@ -515,11 +522,6 @@ impl ContactState {
             .collect();
         use wgpu::BufferUsages as U;
         let st = U::STORAGE;
-        let params_buf = alloc.init(
-            "contact_params",
-            bytemuck::bytes_of(&params),
-            U::UNIFORM | U::COPY_DST,
-        );
         let nodes_buf = alloc.init("contact_nodes", bytemuck::cast_slice(&node_words), st);
         let ref_buf = alloc.init("contact_reference", bytemuck::cast_slice(&c_ref), st);
         let slot_words = if slots.is_empty() {
@@ -541,11 +543,9 @@ impl ContactState {
             &vec![0u8; (CONS_SIZE as usize) * slots.len().max(1)],
             st,
         );
-        let ctl = alloc.init(
-            "contact_counters",
-            &vec![0u8; CTL_SIZE as usize],
-            st | U::COPY_SRC | U::COPY_DST,
-        );
+        let mut ctl_init = vec![0u8; CTL_SIZE as usize];
+        ctl_init[..PARAMS_SIZE as usize].copy_from_slice(bytemuck::bytes_of(&params));
+        let ctl = alloc.init("contact_state", &ctl_init, st | U::COPY_SRC | U::COPY_DST);
         let ws = alloc.init("contact_workspace", bytemuck::cast_slice(&ws_init), st);
         let grow_buf = alloc.init(
             "contact_candidates",
@@ -591,7 +591,6 @@ impl ContactState {
         });
         alloc.record("contact_index", index.size());
         let entries = vec![
-            (0, params_buf.clone()),
             (1, shared.ctrl.clone()),
             (2, shared.nodes.clone()),
             (3, shared.v_prev.clone()),
@@ -624,7 +623,6 @@ impl ContactState {
             nodes: t.nodes,
             names,
             counters: ContactCounters::default(),
-            params_buf,
             ctl,
             grow_buf,
             history,
@@ -672,6 +670,11 @@ impl ContactState {
         pass.set_bind_group(1, &self.ind_bind, &[]);
         pass.dispatch_workgroups(1, 1, 1);
         for (e, pl) in k.search.iter().enumerate() {
+            // The one-workgroup solve colours the step's constraints itself: no colouring of
+            // the slots at the search.
+            if p.multi == 0 && e >= 11 {
+                break;
+            }
             if e == 11 {
                 for r in 0..p.jp_rounds {
                     pass.set_pipeline(pl);
@@ -762,10 +765,10 @@ impl ContactState {
             self.params.colors_recorded = c.n_colors.min(MAX_COLORS);
         }
         self.grows += 1;
-        queue.write_buffer(&self.params_buf, 0, bytemuck::bytes_of(&self.params));
-        // due = 1 (offset 0), grow = 0 (offset 32).
-        queue.write_buffer(&self.ctl, 0, bytemuck::bytes_of(&1u32));
-        queue.write_buffer(&self.ctl, 32, bytemuck::bytes_of(&0u32));
+        queue.write_buffer(&self.ctl, 0, bytemuck::bytes_of(&self.params));
+        // Counters: due = 1 (offset 0), grow = 0 (offset 32).
+        queue.write_buffer(&self.ctl, PARAMS_SIZE, bytemuck::bytes_of(&1u32));
+        queue.write_buffer(&self.ctl, PARAMS_SIZE + 32, bytemuck::bytes_of(&0u32));
         Ok(())
     }
 }

@@ -16,7 +16,7 @@ pub const MULTI_SWEEPS: u32 = 16;
 /// A sweep converges when no gap changes by more than this fraction of the search margin. The
 /// margin is half the shortest segment, and f32 resolves relative coordinates to about 1e-7 of
 /// an element, so this is about 50 f32 units of a gap: reachable, and 1e-5 of half an element.
-pub const TOLERANCE: f64 = 1e-5;
+pub const TOLERANCE: f64 = 1e-4;
 
 /// Slots from which the per-colour path is used on a discrete or integrated GPU. On CPU adapters
 /// (lavapipe) a dispatch costs more than a colour's work, and the one-workgroup path is used.
