@@ -173,6 +173,8 @@ pub struct Counters {
     pub readbacks: u64,
     /// Contact broad-phase searches (0 without contact).
     pub contact_searches: u64,
+    /// Bytes copied from the device to the host so far (GPU; 0 on the CPU).
+    pub bytes_read_back: u64,
 }
 
 /// A time integrator of a model: the CPU reference or the GPU backend.
