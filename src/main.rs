@@ -48,6 +48,20 @@ enum BenchBackend {
     Both,
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BenchScene {
+    /// The N x N block without contact (the first table, with its contact-pair column).
+    Block,
+    /// The block pressed into its base (second table).
+    Pair,
+    /// A striker into a plate at v0 / c = 0.05 (second table).
+    Striker,
+    /// A pile of disks dropped onto a rigid wall, one contact over all bodies (second table).
+    Pile,
+    /// All of the above.
+    All,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Run a scene.
@@ -68,21 +82,34 @@ enum Command {
         adapter: Option<String>,
     },
     /// Throughput benchmark on a generated N x N block (no contact), with the full step over the
-    /// bare element-and-update loop and the cost of a contact pair, in the same run.
+    /// bare element-and-update loop and the cost of a contact pair, in the same run; and, with
+    /// --scene, contact scenes (pair, striker, pile) with and without their contact.
     Bench {
         /// Backend(s).
         #[arg(long, value_enum, default_value = "auto")]
         backend: BenchBackend,
-        /// Cells per side (elements = N^2); several allowed.
+        /// Scenes: the block (first table) and/or the contact scenes (second table).
+        #[arg(long, value_enum, num_args = 1.., default_values_t = [BenchScene::Block])]
+        scene: Vec<BenchScene>,
+        /// Cells per side of the block scene (elements = N^2); several allowed.
         #[arg(long, num_args = 1.., default_values_t = [32usize, 100, 316, 1000])]
         cells: Vec<usize>,
+        /// Element targets of the contact scenes (each mapped to the nearest size); several
+        /// allowed.
+        #[arg(long, num_args = 1.., default_values_t = [10_000usize, 100_000, 1_000_000])]
+        elements: Vec<usize>,
+        /// The pile with one [[contact]] per pair of disks instead of `bodies = "all"` (a
+        /// fallback where that does not parse; small piles only).
+        #[arg(long)]
+        pile_pairs: bool,
         /// Steps timed per size.
         #[arg(long, default_value_t = 200)]
         steps: u64,
         /// Rounds the steps are split into, each variant timed in alternation (medians reported).
         #[arg(long, default_value_t = ricochet::bench::DEFAULT_ROUNDS)]
         rounds: u32,
-        /// Also write the table as JSON.
+        /// Also write the table(s) as JSON: the block rows as an array; with a contact scene,
+        /// an object {"block": [...], "contact": [...]}.
         #[arg(long)]
         json: Option<PathBuf>,
         /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
@@ -183,12 +210,37 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
         Command::Bench {
             backend,
+            scene,
             cells,
+            elements,
+            pile_pairs,
             steps,
             rounds,
             json,
             adapter,
         } => {
+            if rounds == 0 || steps == 0 {
+                anyhow::bail!("--steps and --rounds must be positive");
+            }
+            let all = scene.contains(&BenchScene::All);
+            let block = all || scene.contains(&BenchScene::Block);
+            let contact_scenes: Vec<ricochet::bench::ContactScene> =
+                ricochet::bench::ContactScene::ALL
+                    .into_iter()
+                    .filter(|c| {
+                        all || scene.contains(&match c {
+                            ricochet::bench::ContactScene::Pair => BenchScene::Pair,
+                            ricochet::bench::ContactScene::Striker => BenchScene::Striker,
+                            ricochet::bench::ContactScene::Pile => BenchScene::Pile,
+                        })
+                    })
+                    .collect();
+            if block && cells.contains(&0) {
+                anyhow::bail!("--cells must be positive");
+            }
+            if !contact_scenes.is_empty() && elements.contains(&0) {
+                anyhow::bail!("--elements must be positive");
+            }
             let ctx = match backend {
                 BenchBackend::Cpu => None,
                 BenchBackend::Auto => GpuContext::new(adapter.as_deref()).ok().map(Arc::new),
@@ -201,26 +253,84 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 BenchBackend::Cpu | BenchBackend::Both | BenchBackend::Auto
             );
             let mut rows = Vec::new();
-            for &n in &cells {
-                if n == 0 {
-                    anyhow::bail!("--cells must be positive");
-                }
-                if rounds == 0 || steps == 0 {
-                    anyhow::bail!("--steps and --rounds must be positive");
-                }
-                if run_cpu {
-                    rows.push(ricochet::bench::cpu(n, steps, rounds)?);
-                    eprint!("{}", ricochet::bench::table(&rows[rows.len() - 1..]));
-                }
-                if let Some(ctx) = &ctx {
-                    rows.push(ricochet::bench::gpu(ctx.clone(), n, steps, rounds)?);
-                    eprint!("{}", ricochet::bench::table(&rows[rows.len() - 1..]));
+            if block {
+                for &n in &cells {
+                    if run_cpu {
+                        rows.push(ricochet::bench::cpu(n, steps, rounds)?);
+                        eprint!("{}", ricochet::bench::table(&rows[rows.len() - 1..]));
+                    }
+                    if let Some(ctx) = &ctx {
+                        rows.push(ricochet::bench::gpu(ctx.clone(), n, steps, rounds)?);
+                        eprint!("{}", ricochet::bench::table(&rows[rows.len() - 1..]));
+                    }
                 }
             }
-            println!("{}", ricochet::bench::table(&rows));
-            print!("{}", ricochet::bench::summary(&rows));
+            let pile = if pile_pairs {
+                ricochet::bench::PileContact::Pairs
+            } else {
+                ricochet::bench::PileContact::All
+            };
+            let mut contact_rows = Vec::new();
+            let mut push = |what: String, row: ricochet::Result<ricochet::bench::ContactRow>| {
+                match row {
+                    Ok(row) => {
+                        eprint!(
+                            "{}",
+                            ricochet::bench::contact_table(std::slice::from_ref(&row))
+                        );
+                        contact_rows.push(row);
+                    }
+                    // A scene a backend cannot run (the GPU's body limit, `bodies = "all"` where
+                    // it does not parse) is reported and skipped; the others go on.
+                    Err(e) => eprintln!("{what}: skipped: {e}"),
+                }
+            };
+            for &which in &contact_scenes {
+                for &target in &elements {
+                    let size = which.size_for(target);
+                    let what = |backend: &str| {
+                        format!(
+                            "{} {backend} {} elements",
+                            which.name(),
+                            which.elements(size)
+                        )
+                    };
+                    if run_cpu {
+                        let row = ricochet::bench::cpu_contact(which, size, steps, rounds, pile);
+                        push(what("cpu"), row);
+                    }
+                    if let Some(ctx) = &ctx {
+                        let row = ricochet::bench::gpu_contact(
+                            ctx.clone(),
+                            which,
+                            size,
+                            steps,
+                            rounds,
+                            pile,
+                        );
+                        push(what("gpu"), row);
+                    }
+                }
+            }
+            if block {
+                println!("{}", ricochet::bench::table(&rows));
+                print!("{}", ricochet::bench::summary(&rows));
+            }
+            if !contact_rows.is_empty() {
+                if block {
+                    println!();
+                }
+                print!("{}", ricochet::bench::contact_table(&contact_rows));
+            }
             if let Some(path) = json {
-                std::fs::write(&path, serde_json::to_string_pretty(&rows)?)
+                let text = if contact_scenes.is_empty() {
+                    serde_json::to_string_pretty(&rows)?
+                } else {
+                    serde_json::to_string_pretty(
+                        &serde_json::json!({ "block": rows, "contact": contact_rows }),
+                    )?
+                };
+                std::fs::write(&path, text)
                     .with_context(|| format!("writing {}", path.display()))?;
             }
             Ok(ExitCode::SUCCESS)
