@@ -540,6 +540,8 @@ fn pressure_and_damping_compile_their_kernels_only_when_used() {
 
 #[path = "gpu/contact.rs"]
 mod contact;
+#[path = "gpu/general.rs"]
+mod general;
 #[path = "gpu/patch.rs"]
 mod patch;
 #[path = "gpu/plan.rs"]

@@ -219,3 +219,40 @@ impl ContactSet {
         t
     }
 }
+
+impl ContactSet {
+    /// The (slot, segment) pairs, in [`Tables`] numbering, of the constraints of the last
+    /// [`ContactSet::apply`] that carry an impulse (wall constraints excluded): the pairs the
+    /// narrow phase activated, against which a device search's candidates are checked in tests.
+    pub fn active_pairs(&self) -> Vec<(u32, u32)> {
+        let mut slot_base = Vec::with_capacity(self.passes.len());
+        let mut seg_base = Vec::with_capacity(self.passes.len());
+        let (mut sb, mut gb) = (0u32, 0u32);
+        for p in &self.passes {
+            slot_base.push(sb);
+            seg_base.push(gb);
+            sb += p.slaves.len() as u32;
+            gb += p.segments.len() as u32;
+        }
+        let mut out = Vec::new();
+        for c in &self.cons {
+            if c.a == u32::MAX || c.lambda <= 0.0 {
+                continue;
+            }
+            for (pi, p) in self.passes.iter().enumerate() {
+                if p.interface as u32 != c.interface {
+                    continue;
+                }
+                let Some(si) = p.slaves.iter().position(|&s| s == c.s) else {
+                    continue;
+                };
+                if let Some(j) = p.segments.iter().position(|&ab| ab == [c.a, c.b]) {
+                    out.push((slot_base[pi] + si as u32, seg_base[pi] + j as u32));
+                    break;
+                }
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+}

@@ -166,7 +166,9 @@ impl GpuSolver {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        state.allocated.push(("rows_readback", rows_readback.size()));
+        state
+            .allocated
+            .push(("rows_readback", rows_readback.size()));
         let counters_bytes = if state.contact.is_some() {
             std::mem::size_of::<ContactCounters>() as u64
         } else {
@@ -475,7 +477,9 @@ impl GpuSolver {
         let mut enc = self
             .ctx
             .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rows") });
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("rows"),
+            });
         let cap = ROW_CAPACITY as usize;
         let first = self.rows_read as usize % cap;
         let stride = self.state.params.row_stride as usize;
@@ -513,7 +517,9 @@ impl GpuSolver {
         let device = &self.ctx.device;
         let (Some(c), Some(k)) = (self.state.contact.as_mut(), self.kernels.contact.as_ref())
         else {
-            return Err(Error::Gpu("contact grow requested without contact buffers".into()));
+            return Err(Error::Gpu(
+                "contact grow requested without contact buffers".into(),
+            ));
         };
         c.grow(device, &self.ctx.queue, k)?;
         self.ctx.queue.write_buffer(
@@ -608,6 +614,45 @@ impl GpuSolver {
                 .map(|i| [f[4 * i + 2] as f64, f[4 * i + 3] as f64])
                 .collect(),
         ))
+    }
+
+    /// Test hook: each slot's candidate segments from the last device search ([`crate::contact::Tables`]
+    /// numbering), read back from the device (one extra readback).
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the scene has no contact or the device is lost.
+    pub fn contact_candidates(&mut self) -> Result<Vec<Vec<u32>>> {
+        let Some(c) = self.state.contact.as_ref() else {
+            return Err(Error::Gpu("the scene has no contact".into()));
+        };
+        let p = c.params;
+        let (Some(ws), Some(grow)) = (c.binding(13).cloned(), c.binding(14).cloned()) else {
+            return Err(Error::Gpu("contact buffers missing".into()));
+        };
+        let n = p.n_slots as u64;
+        let off_bytes = 4 * (n + 1);
+        let cand_bytes = 4 * p.cand_capacity as u64;
+        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("candidates_readback"),
+            size: off_bytes + cand_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("candidates"),
+            });
+        enc.copy_buffer_to_buffer(&ws, 4 * p.o_coff as u64, &staging, 0, off_bytes);
+        enc.copy_buffer_to_buffer(&grow, 0, &staging, off_bytes, cand_bytes);
+        self.ctx.queue.submit([enc.finish()]);
+        let bytes = self.map_read(&staging)?;
+        let w: &[u32] = bytemuck::cast_slice(&bytes);
+        let (off, cand) = w.split_at(n as usize + 1);
+        Ok((0..n as usize)
+            .map(|k| cand[off[k] as usize..off[k + 1] as usize].to_vec())
+            .collect())
     }
 
     /// Kernel test hook: uploads displacements `u` and half-step velocities `v`, runs the element

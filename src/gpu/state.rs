@@ -419,9 +419,8 @@ impl GpuState {
 
         let contact = match (contact_set, &kernels.contact) {
             (Some(set), Some(p)) => {
-                let multi = contact_multi.unwrap_or_else(|| {
-                    super::contact::multi_path(set.slot_count(), device_type)
-                });
+                let multi = contact_multi
+                    .unwrap_or_else(|| super::contact::multi_path(set.slot_count(), device_type));
                 Some(ContactState::new(
                     device,
                     p,

@@ -18,18 +18,19 @@ use scenes::cases;
 
 /// The contact kernel's buffers (`src/gpu/contact.rs`).
 const CONTACT: [&str; 11] = [
-    "contact_params",
+    "contact_state",
     "contact_nodes",
     "contact_reference",
     "contact_slots",
     "contact_segments",
-    "contact_search",
-    "contact_u_search",
-    "contact_scratch",
-    "contact_velocities",
+    "contact_nodal",
     "contact_constraints",
+    "contact_workspace",
+    "contact_candidates",
+    "contact_workspace_f32",
     "contact_history",
 ];
+const CONTACT_INDEX: [&str; 2] = ["contact_indirect", "contact_index"];
 
 /// The buffers a plan needs on the device, by name, right after the solver is built.
 fn expected_buffers(plan: &Plan) -> BTreeSet<&'static str> {
@@ -59,6 +60,8 @@ fn expected_buffers(plan: &Plan) -> BTreeSet<&'static str> {
         "times",
         "indirect",
         "readback",
+        "rows_readback",
+        "instance_sums",
     ]
     .into();
     if plan.has(HourglassViscous) || plan.has(BulkViscosity) {
@@ -78,6 +81,7 @@ fn expected_buffers(plan: &Plan) -> BTreeSet<&'static str> {
     }
     if plan.has(Contact) {
         b.extend(CONTACT);
+        b.extend(CONTACT_INDEX);
     }
     b
 }
@@ -173,7 +177,10 @@ fn gpu_contact_searches_read_back_only_counters_and_rows() {
         assert_eq!(c.contact_searches > 0, plan.has(Contact), "{name}");
         // No staging buffer for node state: the search runs on the device.
         assert!(
-            !gpu.state().allocated.iter().any(|(n, _)| n.contains("search")),
+            !gpu.state()
+                .allocated
+                .iter()
+                .any(|(n, _)| n.contains("search")),
             "{name}"
         );
         // Per batch: the control block (256 bytes) and the contact counters (64), plus the

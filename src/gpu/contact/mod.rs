@@ -546,11 +546,15 @@ impl ContactState {
         let mut ctl_init = vec![0u8; CTL_SIZE as usize];
         ctl_init[..PARAMS_SIZE as usize].copy_from_slice(bytemuck::bytes_of(&params));
         let ctl = alloc.init("contact_state", &ctl_init, st | U::COPY_SRC | U::COPY_DST);
-        let ws = alloc.init("contact_workspace", bytemuck::cast_slice(&ws_init), st);
+        let ws = alloc.init(
+            "contact_workspace",
+            bytemuck::cast_slice(&ws_init),
+            st | U::COPY_SRC,
+        );
         let grow_buf = alloc.init(
             "contact_candidates",
             &vec![0u8; 4 * (params.cand_capacity + params.adj_capacity) as usize],
-            st,
+            st | U::COPY_SRC,
         );
         let fws = alloc.init(
             "contact_workspace_f32",
@@ -643,6 +647,11 @@ impl ContactState {
     /// Global node indices of the contact nodes.
     pub fn nodes(&self) -> &[u32] {
         &self.nodes
+    }
+
+    /// The buffer at `binding` of the contact bind group (test hooks).
+    pub(crate) fn binding(&self, binding: u32) -> Option<&wgpu::Buffer> {
+        self.entries.iter().find(|e| e.0 == binding).map(|e| &e.1)
     }
 
     /// Whether the per-colour solve path is in use.
@@ -742,7 +751,7 @@ impl ContactState {
             self.grow_buf = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("contact_candidates"),
                 size: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
             for e in &mut self.entries {
