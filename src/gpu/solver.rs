@@ -42,9 +42,17 @@ pub struct GpuSolver {
     finished: bool,
     /// Offset of the contact counters in `readback`.
     counters_at: u64,
-    /// Staging buffer of the new history rows (main and contact rows, packed).
+    /// Staging buffer of the new history rows: main rows packed from 0, contact rows packed
+    /// from `contact_rows_at`.
     rows_readback: wgpu::Buffer,
+    contact_rows_at: u64,
+    /// Rows from `rows_read` on copied with the last submission (most batches write one).
+    spec_rows: u32,
 }
+
+/// History rows copied with each submission, so that the usual batch (one sample) needs one
+/// round trip; more rows are read in a second one.
+const SPEC_ROWS: u32 = 4;
 
 /// What failure messages need of the model.
 #[derive(Debug, Clone)]
@@ -160,6 +168,7 @@ impl GpuSolver {
             .as_ref()
             .map_or(0, |c| 4 * (ROW_CAPACITY * c.params.hist_stride) as u64);
         let counters_at = 256;
+        let contact_rows_at = history_bytes;
         let rows_readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("rows_readback"),
             size: history_bytes + contact_row_bytes,
@@ -226,6 +235,8 @@ impl GpuSolver {
             finished: false,
             counters_at,
             rows_readback,
+            contact_rows_at,
+            spec_rows: 0,
         })
     }
 
@@ -285,6 +296,8 @@ impl GpuSolver {
             0,
             std::mem::size_of::<Control>() as u64,
         );
+        self.spec_rows = steps.min(SPEC_ROWS);
+        self.copy_rows(&mut enc, self.spec_rows as usize);
         if let Some(c) = &self.state.contact {
             enc.copy_buffer_to_buffer(
                 &c.ctl,
@@ -322,7 +335,8 @@ impl GpuSolver {
     /// Reads back the control block and the new history rows.
     fn read(&mut self, events: &mut Vec<Event>) -> Result<()> {
         let readback = self.readback.clone();
-        let bytes = self.map_read(&readback)?;
+        let rows_rb = self.rows_readback.clone();
+        let (bytes, spec) = self.map_with_rows(&readback)?;
         self.counters.readbacks += 1;
         let ctrl: Control = bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<Control>()]);
         if let Some(c) = self.state.contact.as_mut() {
@@ -338,14 +352,16 @@ impl GpuSolver {
             .as_ref()
             .map_or(0, |c| c.params.hist_stride as usize);
         let new_rows = ctrl.rows.saturating_sub(self.rows_read).min(ROW_CAPACITY) as usize;
-        let hist_len = (4 * stride * new_rows) as u64;
-        let rows_bytes = if new_rows > 0 {
-            self.read_rows(new_rows, hist_len, cstride)?
+        let hist_len = 4 * stride * new_rows;
+        let rows_bytes = if new_rows <= self.spec_rows as usize {
+            spec
         } else {
-            Vec::new()
+            self.read_rows(new_rows)?
         };
-        let hist: &[u8] = &rows_bytes[..hist_len.min(rows_bytes.len() as u64) as usize];
-        let chist: &[u8] = &rows_bytes[hist.len()..];
+        let _ = rows_rb;
+        let hist: &[u8] = &rows_bytes[..hist_len];
+        let at = self.contact_rows_at as usize;
+        let chist: &[u8] = &rows_bytes[at..at + 4 * cstride * new_rows];
         let nb = self.names.bodies.len();
         let mut row_events = Vec::new();
         let first_row = self.rows_read;
@@ -471,27 +487,22 @@ impl GpuSolver {
         Ok(())
     }
 
-    /// Copies the `n` history rows from `rows_read` on (main rows, then contact rows of
-    /// `cstride` words, each packed in order) into the staging buffer and reads them.
-    fn read_rows(&mut self, n: usize, hist_len: u64, cstride: usize) -> Result<Vec<u8>> {
-        let mut enc = self
-            .ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("rows"),
-            });
+    /// Records copies of the `n` history rows from `rows_read` on (main rows, then contact rows,
+    /// each packed in order) into the rows staging buffer.
+    fn copy_rows(&self, enc: &mut wgpu::CommandEncoder, n: usize) {
         let cap = ROW_CAPACITY as usize;
         let first = self.rows_read as usize % cap;
-        let stride = self.state.params.row_stride as usize;
         let mut copy = |src: &wgpu::Buffer, words: usize, dst_at: u64| {
             let head = n.min(cap - first);
-            enc.copy_buffer_to_buffer(
-                src,
-                (4 * first * words) as u64,
-                &self.rows_readback,
-                dst_at,
-                (4 * head * words) as u64,
-            );
+            if head > 0 {
+                enc.copy_buffer_to_buffer(
+                    src,
+                    (4 * first * words) as u64,
+                    &self.rows_readback,
+                    dst_at,
+                    (4 * head * words) as u64,
+                );
+            }
             if head < n {
                 enc.copy_buffer_to_buffer(
                     src,
@@ -502,13 +513,64 @@ impl GpuSolver {
                 );
             }
         };
-        copy(&self.state.history, stride, 0);
+        copy(
+            &self.state.history,
+            self.state.params.row_stride as usize,
+            0,
+        );
         if let Some(c) = &self.state.contact {
-            copy(&c.history, cstride, hist_len);
+            copy(&c.history, c.params.hist_stride as usize, self.contact_rows_at);
         }
+    }
+
+    /// Bytes of `n` main and contact history rows.
+    fn row_bytes(&self, n: usize) -> u64 {
+        let c = self
+            .state
+            .contact
+            .as_ref()
+            .map_or(0, |c| c.params.hist_stride as u64);
+        4 * n as u64 * (self.state.params.row_stride as u64 + c)
+    }
+
+    /// Maps the control readback and the rows copied with the submission in one round trip.
+    fn map_with_rows(&mut self, readback: &wgpu::Buffer) -> Result<(Vec<u8>, Vec<u8>)> {
+        let rows = self.rows_readback.clone();
+        self.counters.bytes_read_back += readback.size() + self.row_bytes(self.spec_rows as usize);
+        let a = readback.slice(..);
+        let b = rows.slice(..);
+        a.map_async(wgpu::MapMode::Read, |_| {});
+        b.map_async(wgpu::MapMode::Read, |_| {});
+        self.ctx
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("device lost while waiting: {e}")))?;
+        let get = |s: wgpu::BufferSlice<'_>| -> Result<Vec<u8>> {
+            Ok(s.get_mapped_range()
+                .map_err(|e| Error::Gpu(format!("cannot map readback buffer: {e:?}")))?
+                .to_vec())
+        };
+        let out = (get(a)?, get(b)?);
+        readback.unmap();
+        rows.unmap();
+        Ok(out)
+    }
+
+    /// Reads the `n` history rows from `rows_read` on in a second round trip (a batch that
+    /// wrote more rows than were copied with it).
+    fn read_rows(&mut self, n: usize) -> Result<Vec<u8>> {
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rows") });
+        self.copy_rows(&mut enc, n);
         self.ctx.queue.submit([enc.finish()]);
         let rb = self.rows_readback.clone();
-        self.map_prefix(&rb, hist_len + (4 * n * cstride) as u64)
+        self.counters.readbacks += 1;
+        let bytes = self.map_prefix(&rb, rb.size())?;
+        self.counters.bytes_read_back -= rb.size();
+        self.counters.bytes_read_back += self.row_bytes(n);
+        Ok(bytes)
     }
 
     /// A contact search stopped the step because a contact buffer is too small: grows it (from
