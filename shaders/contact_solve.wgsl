@@ -16,6 +16,7 @@ var<workgroup> sh_w: u32;
 var<workgroup> sh_nc: u32;
 var<workgroup> sh_off: array<u32, 34>;   // colour offsets of the compacted slots (SERIAL + 2)
 var<workgroup> sh_max: atomic<u32>;
+var<workgroup> sh_pre: array<u32, RG>;
 
 // Whether any invocation's `x` is positive, as a workgroup-uniform value: a tree over sh_m with
 // barriers, written by invocation 0 into a plain workgroup word. (Every exit of the solve loops
@@ -72,16 +73,48 @@ fn clear_mask(i: u32) {
 // (sh_off: offsets): sequential in invocation 0, so the same on every run. A constraint that
 // finds all 32 colours taken goes to the serial colour, which invocation 0 sweeps alone.
 fn compact(l: u32) {
+    // The Lagrange slots in slot order into ws[o_color..]: each invocation a contiguous chunk,
+    // offsets by a prefix over the invocations.
+    let n = cc.p.n_slots;
+    let chunk = (n + RG - 1u) / RG;
+    let begin = min(l * chunk, n);
+    let end = min(begin + chunk, n);
+    var mine = 0u;
+    for (var k = begin; k < end; k++) {
+        if (cons[k].kind == KIND_LAGRANGE) {
+            mine += 1u;
+        }
+    }
+    sh_pre[l] = mine;
+    workgroupBarrier();
     if (l == 0u) {
+        var acc = 0u;
+        for (var t = 0u; t < RG; t++) {
+            let x = sh_pre[t];
+            sh_pre[t] = acc;
+            acc += x;
+        }
+        sh_nc = acc;
+    }
+    workgroupBarrier();
+    var at = sh_pre[l];
+    for (var k = begin; k < end; k++) {
+        if (cons[k].kind == KIND_LAGRANGE) {
+            ws[cc.p.o_color + at] = k;
+            at += 1u;
+        }
+    }
+    storageBarrier();
+    workgroupBarrier();
+    if (l == 0u) {
+        let na = sh_nc;
         var count: array<u32, 33>;
         for (var c = 0u; c <= SERIAL; c++) {
             count[c] = 0u;
         }
-        for (var k = 0u; k < cc.p.n_slots; k++) {
+        for (var j = 0u; j < na; j++) {
+            let k = ws[cc.p.o_color + j];
             let c = cons[k];
-            if (c.kind != KIND_LAGRANGE) {
-                continue;
-            }
             let s = slots[k].s;
             let used = mask_of(s) | mask_of(c.a) | mask_of(c.b);
             var col = SERIAL;
@@ -91,7 +124,7 @@ fn compact(l: u32) {
                 take_mask(c.a, col);
                 take_mask(c.b, col);
             }
-            ws[cc.p.o_color + k] = col;
+            ws[cc.p.o_list + j] = col;
             count[col] += 1u;
         }
         var acc = 0u;
@@ -101,12 +134,10 @@ fn compact(l: u32) {
             count[c] = 0u;
         }
         sh_off[SERIAL + 1u] = acc;
-        for (var k = 0u; k < cc.p.n_slots; k++) {
+        for (var j = 0u; j < na; j++) {
+            let k = ws[cc.p.o_color + j];
             let c = cons[k];
-            if (c.kind != KIND_LAGRANGE) {
-                continue;
-            }
-            let col = ws[cc.p.o_color + k];
+            let col = ws[cc.p.o_list + j];
             ws[cc.p.o_act + sh_off[col] + count[col]] = k;
             count[col] += 1u;
             clear_mask(slots[k].s);

@@ -273,6 +273,24 @@ impl GpuSolver {
         (steps.max(0.0) as u32).clamp(MIN_BATCH, MAX_BATCH)
     }
 
+    /// History rows a batch of `steps` steps is expected to write (at most [`SPEC_ROWS`]): one
+    /// per history time it may reach (with half the batch again of slack), the first step's and
+    /// the end's.
+    fn expected_rows(&self, steps: u32) -> u32 {
+        let s = &self.schedule;
+        let t = self.time_of(&self.ctrl);
+        let reach = t + 1.5 * steps as f64 * self.dt_estimate;
+        let mut n = ((reach / s.history_interval).floor() - (t / s.history_interval).floor())
+            .clamp(0.0, SPEC_ROWS as f64) as u32;
+        if self.ctrl.step == 0 {
+            n += 1;
+        }
+        if reach >= s.end_time {
+            n += 1;
+        }
+        n.min(steps).min(SPEC_ROWS)
+    }
+
     /// Records `steps` steps in one submission, with a copy of the control block and history
     /// into the readback buffer at the end.
     pub fn submit(&mut self, steps: u32) {
@@ -296,7 +314,7 @@ impl GpuSolver {
             0,
             std::mem::size_of::<Control>() as u64,
         );
-        self.spec_rows = steps.min(SPEC_ROWS);
+        self.spec_rows = self.expected_rows(steps);
         self.copy_rows(&mut enc, self.spec_rows as usize);
         if let Some(c) = &self.state.contact {
             enc.copy_buffer_to_buffer(
