@@ -15,7 +15,7 @@ use super::contact::{ContactCounters, STATE_SEARCH_GROW};
 use super::context::GpuContext;
 use super::kernels::{Features, Kernels};
 use super::layout::*;
-use super::state::{GpuState, ROW_CAPACITY};
+use super::state::GpuState;
 
 /// One 2-vector per node.
 pub type NodalField = Vec<[f64; 2]>;
@@ -162,11 +162,12 @@ impl GpuSolver {
             )));
         }
         let mut state = state?;
-        let history_bytes = 4 * (ROW_CAPACITY * state.params.row_stride) as u64;
+        let row_cap = state.params.row_capacity;
+        let history_bytes = 4 * (row_cap as u64 * state.params.row_stride as u64);
         let contact_row_bytes = state
             .contact
             .as_ref()
-            .map_or(0, |c| 4 * (ROW_CAPACITY * c.params.hist_stride) as u64);
+            .map_or(0, |c| 4 * (row_cap as u64 * c.params.hist_stride as u64));
         let counters_at = 256;
         let contact_rows_at = history_bytes;
         let rows_readback = device.create_buffer(&wgpu::BufferDescriptor {
@@ -369,7 +370,10 @@ impl GpuSolver {
             .contact
             .as_ref()
             .map_or(0, |c| c.params.hist_stride as usize);
-        let new_rows = ctrl.rows.saturating_sub(self.rows_read).min(ROW_CAPACITY) as usize;
+        let new_rows = ctrl
+            .rows
+            .saturating_sub(self.rows_read)
+            .min(self.state.params.row_capacity) as usize;
         let hist_len = 4 * stride * new_rows;
         let rows_bytes = if new_rows <= self.spec_rows as usize {
             spec
@@ -508,7 +512,7 @@ impl GpuSolver {
     /// Records copies of the `n` history rows from `rows_read` on (main rows, then contact rows,
     /// each packed in order) into the rows staging buffer.
     fn copy_rows(&self, enc: &mut wgpu::CommandEncoder, n: usize) {
-        let cap = ROW_CAPACITY as usize;
+        let cap = self.state.params.row_capacity as usize;
         let first = self.rows_read as usize % cap;
         let mut copy = |src: &wgpu::Buffer, words: usize, dst_at: u64| {
             let head = n.min(cap - first);
@@ -537,7 +541,11 @@ impl GpuSolver {
             0,
         );
         if let Some(c) = &self.state.contact {
-            copy(&c.history, c.params.hist_stride as usize, self.contact_rows_at);
+            copy(
+                &c.history,
+                c.params.hist_stride as usize,
+                self.contact_rows_at,
+            );
         }
     }
 
@@ -580,7 +588,9 @@ impl GpuSolver {
         let mut enc = self
             .ctx
             .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rows") });
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("rows"),
+            });
         self.copy_rows(&mut enc, n);
         self.ctx.queue.submit([enc.finish()]);
         let rb = self.rows_readback.clone();

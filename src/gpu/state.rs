@@ -18,8 +18,17 @@ use crate::contact::ContactSet;
 /// Nodes + elements + constraints up to which a CPU adapter reduces in one workgroup.
 pub const FUSED_LIMIT: usize = 1 << 14;
 
-/// Rows the history ring holds between readbacks.
+/// Rows the history ring holds between readbacks, at most (fewer when a row is so wide, with many
+/// bodies, that the ring would exceed the device's largest storage binding; never fewer than the
+/// steps of one submission, [`super::solver::MAX_BATCH`]).
 pub const ROW_CAPACITY: u32 = 4096;
+
+/// The history ring's rows for rows of `stride` words on a device whose largest storage binding
+/// is `max_binding` bytes.
+pub fn row_capacity(stride: u32, max_binding: u64) -> u32 {
+    let fit = max_binding / (4 * stride.max(1) as u64);
+    (fit.min(ROW_CAPACITY as u64) as u32).max(super::solver::MAX_BATCH)
+}
 
 /// Buffers and bind groups of one scene on the device.
 #[derive(Debug)]
@@ -141,7 +150,8 @@ impl GpuState {
     /// control.wgsl); `None` decides by adapter and size.
     ///
     /// # Errors
-    /// [`Error::Gpu`] when the model exceeds what one dispatch can cover or has too many bodies.
+    /// [`Error::Gpu`] when the model exceeds what one dispatch can cover.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         device: &wgpu::Device,
         kernels: &Kernels,
@@ -294,6 +304,10 @@ impl GpuState {
             times.extend(snaps);
         }
         let row_stride = 9 + 2 * nb as u32;
+        let row_cap = row_capacity(
+            row_stride,
+            device.limits().max_storage_buffer_binding_size,
+        );
         let [end_lo, end_hi] = ticks(schedule.end_time, schedule.end_time);
         let params = Params {
             n_nodes: nn as u32,
@@ -307,7 +321,7 @@ impl GpuState {
             n_sample_times,
             n_snapshot_times,
             row_stride,
-            row_capacity: ROW_CAPACITY,
+            row_capacity: row_cap,
             dt_groups: if fused { 0 } else { reduce::groups(ne, rg) },
             n_instances: instances.len() as u32,
             sum_groups,
@@ -405,7 +419,7 @@ impl GpuState {
         );
         let history = a.zeroed(
             "history",
-            4 * (ROW_CAPACITY * row_stride) as u64,
+            4 * (row_cap as u64 * row_stride as u64),
             storage | U::COPY_SRC,
         );
         let times_buf = a.init("times", bytemuck::cast_slice(&times), storage);
@@ -432,7 +446,7 @@ impl GpuState {
                         v_prev: &v_prev,
                         sample_src: &sample_src,
                     },
-                    ROW_CAPACITY,
+                    row_cap,
                     multi,
                     &mut a,
                 )?)

@@ -3,9 +3,7 @@
 
 use super::*;
 
-#[path = "../shared/penetration.rs"]
-mod penetration;
-use penetration::{interpenetration, self_penetration};
+use super::stress::penetration::{interpenetration, self_penetration};
 
 fn asset_path(rel: &str) -> String {
     std::fs::read_to_string(
@@ -329,4 +327,51 @@ bodies = "all"
         total += pairs;
     }
     assert!(total > 100, "only {total} active pairs checked");
+}
+
+/// The 1e4-element pile of the bench (100 disks of 108 elements, one `bodies = "all"` table and
+/// a wall) through its first collisions, on both backends.
+#[test]
+fn gpu_and_cpu_pile_of_a_hundred_disks_collide_without_penetration_and_with_the_same_bits() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text = asset_path("bench/pile_1e4.toml").replace("end_time = 1e-3", "end_time = 2.5e-4");
+    assert!(text.contains("end_time = 2.5e-4"), "the pile's end time");
+    let (r, model, u) = run_gpu(&ctx, &text, "pile100-a", None);
+    let (r2, _, u2) = run_gpu(&ctx, &text, "pile100-b", None);
+    let (scene, cmodel, plan) = load(&text, "pile100-cpu");
+    let mut cpu = CpuSolver::new(cmodel, plan.clone(), schedule(&scene));
+    let dir = tmp_dir("pile100-cpu");
+    let rc = run(&scene, &model, &plan, &mut cpu, &dir, None).expect("cpu run");
+    let _ = std::fs::remove_dir_all(&dir);
+    let h = 0.01 / 6.0;
+    let gpu_in = interpenetration(&model, &u);
+    let cpu_in = interpenetration(&model, cpu.displacement());
+    let active = r
+        .samples
+        .iter()
+        .map(|(s, _)| s.contacts[0].active_nodes)
+        .max()
+        .unwrap_or(0);
+    println!(
+        "pile of 100, 0.25 ms: {} steps; energy error gpu {:.2e} cpu {:.2e}; deepest node inside \
+         another disk gpu {gpu_in:.2e} m cpu {cpu_in:.2e} m; most nodes in disk contact {active}; \
+         {} searches; sweeps mean {:.2} max {}",
+        r.summary.steps,
+        r.summary.max_energy_error,
+        rc.summary.max_energy_error,
+        r.summary.contact_searches,
+        r.summary.contact_sweeps_mean,
+        r.summary.contact_sweeps_max
+    );
+    assert!(active > 0, "the disks met");
+    assert!(r.summary.max_energy_error < 1e-3);
+    assert!(rc.summary.max_energy_error < 1e-3);
+    assert!(gpu_in < 1e-4 * h, "{gpu_in:e} m inside");
+    assert!(cpu_in < 1e-6 * h, "{cpu_in:e} m inside");
+    assert_eq!(history_bits(&r), history_bits(&r2), "two GPU runs differ");
+    assert_eq!(
+        u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>(),
+        u2.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>()
+    );
 }

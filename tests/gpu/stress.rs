@@ -13,7 +13,7 @@ use ricochet::step::Solver;
 use crate::{context, load, GPU_LOCK};
 
 #[path = "../shared/penetration.rs"]
-mod penetration;
+pub(crate) mod penetration;
 use penetration::interpenetration;
 
 fn stress_asset(name: &str) -> String {
