@@ -304,10 +304,7 @@ impl GpuState {
             times.extend(snaps);
         }
         let row_stride = 9 + 2 * nb as u32;
-        let row_cap = row_capacity(
-            row_stride,
-            device.limits().max_storage_buffer_binding_size,
-        );
+        let row_cap = row_capacity(row_stride, device.limits().max_storage_buffer_binding_size);
         let [end_lo, end_hi] = ticks(schedule.end_time, schedule.end_time);
         let params = Params {
             n_nodes: nn as u32,
