@@ -43,7 +43,7 @@ use crate::scene::ContactMethod;
 pub use overlap::Overlap;
 pub use report::ContactSample;
 pub use solve::{penalty_impulse, SweepStats, ACTIVE_SET_ROUNDS, MAX_SWEEPS, SWEEP_TOLERANCE};
-pub use tables::{SearchTables, SegmentTable, SlotTable, Tables};
+pub use tables::{SegmentTable, SlotTable, Tables};
 
 use report::Interface;
 

@@ -1,5 +1,6 @@
-//! The contact set as flat, static tables for the GPU kernel ([`Tables`]), and a search in slot
-//! form ([`SearchTables`]: candidates per slot and a colouring).
+//! The contact set as flat, static tables for the GPU kernels ([`Tables`]), and the pairs the
+//! last step activated in their numbering ([`ContactSet::active_pairs`]), against which the
+//! device search's candidates are checked in tests.
 
 use super::ContactSet;
 use crate::scene::ContactMethod;
@@ -68,33 +69,15 @@ pub struct Tables {
     pub margin: f64,
 }
 
-/// The result of a search in slot form: candidate segments per slot (CSR) and a colouring of the
-/// slots such that slots of one colour share no node (through any candidate).
-#[derive(Debug, Clone, Default)]
-pub struct SearchTables {
-    /// Candidate offsets per slot (slots + 1).
-    pub candidate_offsets: Vec<u32>,
-    /// Candidate segments (indices into [`Tables::segments`]).
-    pub candidates: Vec<u32>,
-    /// Slot offsets per colour (colours + 1).
-    pub color_offsets: Vec<u32>,
-    /// Slots in colour order (ascending within a colour).
-    pub color_slots: Vec<u32>,
-}
-
 impl ContactSet {
-    /// The static tables of the GPU kernel.
-    pub fn tables(&self) -> Tables {
-        self.tables_inner()
-    }
-
     /// Slots of the GPU tables: every pass's slave nodes and every wall's nodes.
     pub fn slot_count(&self) -> usize {
         self.passes.iter().map(|p| p.slaves.len()).sum::<usize>()
             + self.walls.iter().map(|w| w.nodes.len()).sum::<usize>()
     }
 
-    fn tables_inner(&self) -> Tables {
+    /// The static tables of the GPU kernels.
+    pub fn tables(&self) -> Tables {
         let mut slots = Vec::new();
         let mut segments = Vec::new();
         for (pi, p) in self.passes.iter().enumerate() {
@@ -156,67 +139,6 @@ impl ContactSet {
             segments,
             margin: self.margin,
         }
-    }
-
-    /// Searches with the local nodes at `x_n` (start of the step) and `x_tr` (the free update's
-    /// end), the GPU's way: candidates per slot and a colouring (greedy, in slot order).
-    pub fn search_tables(&mut self, x_n: &[[f64; 2]], x_tr: &[[f64; 2]]) -> SearchTables {
-        self.x_n.copy_from_slice(x_n);
-        self.x_tr.copy_from_slice(x_tr);
-        self.search();
-        let mut t = SearchTables::default();
-        t.candidate_offsets.push(0);
-        // Node sets per slot, for the colouring.
-        let mut touched: Vec<Vec<u32>> = Vec::new();
-        let mut seg_base = 0u32;
-        for p in &self.passes {
-            let mut k = 0;
-            for si in 0..p.slaves.len() as u32 {
-                let mut set = vec![p.slaves[si as usize]];
-                while k < p.candidates.len() && p.candidates[k].0 == si {
-                    let j = p.candidates[k].1;
-                    t.candidates.push(seg_base + j);
-                    set.extend(p.segments[j as usize]);
-                    k += 1;
-                }
-                t.candidate_offsets.push(t.candidates.len() as u32);
-                touched.push(set);
-            }
-            seg_base += p.segments.len() as u32;
-        }
-        for w in &self.walls {
-            for &l in &w.nodes {
-                t.candidate_offsets.push(t.candidates.len() as u32);
-                touched.push(vec![l]);
-            }
-        }
-        // Greedy colouring: the lowest colour no slot sharing a node has taken.
-        let mut used: Vec<Vec<u32>> = vec![Vec::new(); self.nodes.len()];
-        let mut color = vec![0u32; touched.len()];
-        let mut colors = 0u32;
-        for (k, set) in touched.iter().enumerate() {
-            let mut c = 0u32;
-            while set.iter().any(|&n| used[n as usize].contains(&c)) {
-                c += 1;
-            }
-            for &n in set {
-                used[n as usize].push(c);
-            }
-            color[k] = c;
-            colors = colors.max(c + 1);
-        }
-        t.color_offsets.push(0);
-        for c in 0..colors {
-            t.color_slots.extend(
-                color
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, &x)| x == c)
-                    .map(|(k, _)| k as u32),
-            );
-            t.color_offsets.push(t.color_slots.len() as u32);
-        }
-        t
     }
 }
 

@@ -3,8 +3,8 @@
 //! Kernels (one `.wgsl` in `shaders/` beside each `.rs` here): [`element`] (stress and forces per
 //! element), [`reduce`] (stable-step minimum, sample sums), [`control`] (step control on the GPU),
 //! [`node`] (gather, central-difference update, energies on sample steps), [`boundary`]
-//! (prescribed velocities), [`loads`] (pressure loads, mass-damping work), [`contact`] (narrow
-//! phase and contact correction). [`kernels::Kernels`] holds the compiled pipelines,
+//! (prescribed velocities), [`loads`] (pressure loads, mass-damping work), [`contact`] (the
+//! contact stage by file: search, narrow phase, the Lagrange correction, reports). [`kernels::Kernels`] holds the compiled pipelines,
 //! [`state::GpuState`] the buffers, [`solver::GpuSolver`] drives them in batches of steps.
 //! All sums are gathers or fixed-order trees: the same scene on the same adapter gives the same bits.
 

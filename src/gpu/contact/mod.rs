@@ -668,16 +668,20 @@ impl ContactState {
     pub fn record(&self, k: &ContactKernels, pass: &mut wgpu::ComputePass<'_>) {
         let p = &self.params;
         let g = |n: u32| n.div_ceil(CG).max(1);
+        // Group 0 is set once (offset 0) and again only where its index offset changes: every
+        // contact pipeline shares its layout, so it stays bound across pipelines.
+        let bind = |pass: &mut wgpu::ComputePass<'_>, entry: u64| {
+            pass.set_bind_group(0, &self.bind, &[(entry * INDEX_STRIDE) as u32]);
+        };
         let direct = |pass: &mut wgpu::ComputePass<'_>, pl: &wgpu::ComputePipeline, n: u32| {
             pass.set_pipeline(pl);
-            pass.set_bind_group(0, &self.bind, &[0]);
             pass.dispatch_workgroups(n, 1, 1);
         };
-        direct(pass, &k.prep, g(p.n_local));
-        pass.set_pipeline(&k.plan);
-        pass.set_bind_group(0, &self.bind, &[0]);
+        pass.set_pipeline(&k.prep);
+        bind(pass, 0);
         pass.set_bind_group(1, &self.ind_bind, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.dispatch_workgroups(g(p.n_local), 1, 1);
+        direct(pass, &k.plan, 1);
         for (e, pl) in k.search.iter().enumerate() {
             // The one-workgroup solve colours the step's constraints itself: no colouring of
             // the slots at the search.
@@ -685,21 +689,18 @@ impl ContactState {
                 break;
             }
             if e == 11 {
+                pass.set_pipeline(pl);
                 for r in 0..p.jp_rounds {
-                    pass.set_pipeline(pl);
-                    pass.set_bind_group(0, &self.bind, &[(r as u64 * INDEX_STRIDE) as u32]);
+                    bind(pass, r as u64);
                     pass.dispatch_workgroups_indirect(&self.ind, 12 * e as u64);
                 }
+                bind(pass, 0);
                 continue;
             }
             if e == 13 {
-                pass.set_pipeline(&k.scan_lists);
-                pass.set_bind_group(0, &self.bind, &[0]);
-                pass.set_bind_group(1, &self.ind_bind, &[]);
-                pass.dispatch_workgroups(1, 1, 1);
+                direct(pass, &k.scan_lists, 1);
             }
             pass.set_pipeline(pl);
-            pass.set_bind_group(0, &self.bind, &[0]);
             pass.dispatch_workgroups_indirect(&self.ind, 12 * e as u64);
         }
         direct(pass, &k.narrow, g(p.n_slots));
@@ -709,21 +710,21 @@ impl ContactState {
         } else {
             let rounds = MAX_SWEEP_SLOTS / p.max_sweeps;
             for r in 0..rounds {
+                pass.set_pipeline(&k.sweep_color);
                 for s in 0..p.max_sweeps {
                     let q = r * p.max_sweeps + s;
                     for c in 0..p.colors_recorded {
-                        let e = ROUND_ENTRIES + (q * MAX_COLORS + c) as u64;
-                        pass.set_pipeline(&k.sweep_color);
-                        pass.set_bind_group(0, &self.bind, &[(e * INDEX_STRIDE) as u32]);
+                        bind(pass, ROUND_ENTRIES + (q * MAX_COLORS + c) as u64);
                         pass.dispatch_workgroups_indirect(&self.ind, 12 * (14 + c as u64));
                     }
                 }
                 if r + 1 < rounds {
                     pass.set_pipeline(&k.recheck);
-                    pass.set_bind_group(0, &self.bind, &[(r as u64 * INDEX_STRIDE) as u32]);
+                    bind(pass, r as u64);
                     pass.dispatch_workgroups(g(p.n_slots), 1, 1);
                 }
             }
+            bind(pass, 0);
         }
         direct(pass, &k.finish, g(p.n_local));
         direct(pass, &k.report_slots, g(p.n_slots));
