@@ -11,7 +11,7 @@ use crate::plan::{Plan, Stage};
 use crate::step::cpu::CpuSolver;
 use crate::step::{Counters, Event, Failure, Sample, Schedule, Snapshot, Solver};
 
-use super::contact::{ContactCounters, STATE_SEARCH_GROW};
+use super::contact::{ContactCounters, ContactOptions, STATE_SEARCH_GROW};
 use super::context::GpuContext;
 use super::kernels::{Features, Kernels};
 use super::layout::*;
@@ -109,12 +109,11 @@ impl GpuSolver {
         schedule: Schedule,
         fused: Option<bool>,
     ) -> Result<Self> {
-        Self::with_options(ctx, model, plan, schedule, fused, None)
+        Self::with_options(ctx, model, plan, schedule, fused, ContactOptions::default())
     }
 
-    /// As [`GpuSolver::with_reductions`], also choosing the contact solve path: one dispatch per
-    /// colour and sweep (`Some(true)`) or one workgroup (`Some(false)`); `None` decides by adapter
-    /// and size ([`super::contact::multi_path`]).
+    /// As [`GpuSolver::with_reductions`], also choosing the contact stage's options (solve path,
+    /// initial candidate capacity; see [`ContactOptions`]).
     ///
     /// # Errors
     /// [`Error::Gpu`] when the model does not fit.
@@ -124,7 +123,7 @@ impl GpuSolver {
         plan: &Plan,
         schedule: Schedule,
         fused: Option<bool>,
-        contact_multi: Option<bool>,
+        contact: ContactOptions,
     ) -> Result<Self> {
         let features = Features {
             dissipation: plan.has_dissipation(),
@@ -153,7 +152,7 @@ impl GpuSolver {
             &schedule,
             fused,
             ctx.info.device_type,
-            contact_multi,
+            contact,
         );
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
@@ -704,6 +703,11 @@ impl GpuSolver {
                 .map(|i| [f[4 * i + 2] as f64, f[4 * i + 3] as f64])
                 .collect(),
         ))
+    }
+
+    /// Times a contact buffer grew (the candidates) or a colouring was enlarged during the run.
+    pub fn contact_grows(&self) -> u32 {
+        self.state.contact.as_ref().map_or(0, |c| c.grows)
     }
 
     /// Test hook: each slot's candidate segments from the last device search ([`crate::contact::Tables`]

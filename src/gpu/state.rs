@@ -160,7 +160,7 @@ impl GpuState {
         schedule: &Schedule,
         fused: Option<bool>,
         device_type: wgpu::DeviceType,
-        contact_multi: Option<bool>,
+        contact: super::contact::ContactOptions,
     ) -> Result<GpuState> {
         let nn = model.node_count();
         let ne = model.element_count();
@@ -430,7 +430,8 @@ impl GpuState {
 
         let contact = match (contact_set, &kernels.contact) {
             (Some(set), Some(p)) => {
-                let multi = contact_multi
+                let multi = contact
+                    .multi
                     .unwrap_or_else(|| super::contact::multi_path(set.slot_count(), device_type));
                 Some(ContactState::new(
                     device,
@@ -445,6 +446,7 @@ impl GpuState {
                     },
                     row_cap,
                     multi,
+                    contact.candidate_capacity,
                     &mut a,
                 )?)
             }

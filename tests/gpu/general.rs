@@ -3,6 +3,8 @@
 
 use super::*;
 
+use ricochet::gpu::contact::ContactOptions;
+
 use super::stress::penetration::{interpenetration, self_penetration};
 
 fn asset_path(rel: &str) -> String {
@@ -29,9 +31,24 @@ fn run_gpu(
     name: &str,
     multi: Option<bool>,
 ) -> (ricochet::run::RunResult, Model, Vec<[f64; 2]>) {
+    let options = ContactOptions {
+        multi,
+        ..ContactOptions::default()
+    };
+    let (r, model, u, _) = run_gpu_with(ctx, text, name, options);
+    (r, model, u)
+}
+
+/// As [`run_gpu`] with any contact options; also the grow events of the run.
+fn run_gpu_with(
+    ctx: &Arc<GpuContext>,
+    text: &str,
+    name: &str,
+    options: ContactOptions,
+) -> (ricochet::run::RunResult, Model, Vec<[f64; 2]>, u32) {
     let (scene, model, plan) = load(text, name);
     let mut gpu =
-        GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, multi)
+        GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
             .expect("gpu solver");
     let dir = tmp_dir(name);
     let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("run");
@@ -42,7 +59,8 @@ fn run_gpu(
         r.summary.message
     );
     let u = gpu.displacement_now().expect("displacement");
-    (r, model, u)
+    let grows = gpu.contact_grows();
+    (r, model, u, grows)
 }
 
 fn history_bits(r: &ricochet::run::RunResult) -> Vec<u64> {
@@ -373,5 +391,30 @@ fn gpu_and_cpu_pile_of_a_hundred_disks_collide_without_penetration_and_with_the_
     assert_eq!(
         u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>(),
         u2.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>()
+    );
+}
+
+/// A candidate buffer far too small at first grows (the step stops, the host enlarges the
+/// buffer and resumes it), and the run is the same, bit for bit, as one that never had to grow.
+#[test]
+fn gpu_candidate_buffer_grows_and_the_run_is_unchanged() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text = asset_path("stress/striker_plate_gpu_energy.toml")
+        .replace("end_time = 3.2e-6", "end_time = 1.0e-6");
+    assert!(text.contains("end_time = 1.0e-6"));
+    let (r, _, u, grows) = run_gpu_with(&ctx, &text, "grow-default", ContactOptions::default());
+    let small = ContactOptions {
+        candidate_capacity: Some(8),
+        ..ContactOptions::default()
+    };
+    let (rs, _, us, grows_small) = run_gpu_with(&ctx, &text, "grow-small", small);
+    println!("candidate buffer: {grows} grows from the default, {grows_small} from 8 words");
+    assert_eq!(grows, 0);
+    assert!(grows_small > 0, "a buffer of 8 candidates must grow");
+    assert_eq!(history_bits(&r), history_bits(&rs));
+    assert_eq!(
+        u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>(),
+        us.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>()
     );
 }

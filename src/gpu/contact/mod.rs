@@ -392,6 +392,18 @@ fn make_bind(
     })
 }
 
+/// Choices of the contact stage a caller may make (tests, benchmarks); the defaults decide by
+/// adapter and size.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ContactOptions {
+    /// The per-colour solve path (`Some(true)`) or one workgroup (`Some(false)`); `None`:
+    /// [`multi_path`].
+    pub multi: Option<bool>,
+    /// Initial candidate capacity (words); `None`: 4 per slot, at least 1024. A search that
+    /// needs more grows the buffer.
+    pub candidate_capacity: Option<u32>,
+}
+
 /// Whether the per-colour path is used for `slots` slots on an adapter of `device_type`.
 pub fn multi_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
     device_type != wgpu::DeviceType::Cpu && slots >= solve::MULTI_SLOTS
@@ -409,6 +421,7 @@ impl ContactState {
         shared: Shared<'_>,
         row_capacity: u32,
         multi: bool,
+        candidate_capacity: Option<u32>,
         alloc: &mut Alloc<'_>,
     ) -> Result<ContactState> {
         let t = set.tables();
@@ -484,7 +497,7 @@ impl ContactState {
         let hist_stride = 1 + 4 * ni;
         let n_slots = slots.len() as u32;
         let n_segs = segs.len() as u32;
-        let cand_capacity = (4 * n_slots).max(1024);
+        let cand_capacity = candidate_capacity.unwrap_or((4 * n_slots).max(1024)).max(1);
         let mut params = ContactParams {
             n_local: nl as u32,
             n_slots,
