@@ -88,7 +88,7 @@ struct ContactCtl {
     searches: u32,
     grow: atomic<u32>,        // GROW_* requests for the host
     lagrange: atomic<u32>,    // Lagrange constraints of this step
-    new_cons: atomic<u32>,    // constraints added by the last active-set re-check
+    _reserved: u32,           // (keeps the host's offsets)
     sweeps: u32,              // sweeps of this step
     sweeps_total: u32,        // sweeps over the run (steps with Lagrange constraints)
     sweeps_max: u32,

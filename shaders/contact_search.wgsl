@@ -100,7 +100,6 @@ fn plan() {
         atomicStore(&cc.n_colors, 0u);
     }
     atomicStore(&cc.lagrange, 0u);
-    atomicStore(&cc.new_cons, 0u);
     cc.sweeps = 0u;
     for (var q = 0u; q < MAX_SWEEP_SLOTS; q++) {
         atomicStore(&cc.change[q], 0u);

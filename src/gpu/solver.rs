@@ -671,28 +671,41 @@ impl GpuSolver {
         })
     }
 
-    /// Reads the current nodal displacements and half-step velocities (one extra readback).
-    ///
-    /// # Errors
-    /// [`Error::Gpu`] when the device is lost.
-    pub fn nodes(&mut self) -> Result<(NodalField, NodalField)> {
-        let nn = self.names.nodes as u64;
+    /// Copies each `(buffer, offset, bytes)` in turn into one fresh staging buffer, reads it back
+    /// (one readback, counted) and returns the bytes, packed in that order. For test hooks and
+    /// one-off reads; the per-batch readbacks keep their own buffers.
+    fn read_copies(&mut self, label: &str, parts: &[(&wgpu::Buffer, u64, u64)]) -> Result<Vec<u8>> {
+        let total: u64 = parts.iter().map(|p| p.2).sum();
         let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("nodes_readback"),
-            size: 16 * nn.max(1),
+            label: Some(label),
+            size: total.max(4),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let mut enc = self
             .ctx
             .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("nodes"),
-            });
-        enc.copy_buffer_to_buffer(&self.state.nodes, 0, &staging, 0, 16 * nn);
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+        let mut at = 0;
+        for &(src, offset, bytes) in parts {
+            enc.copy_buffer_to_buffer(src, offset, &staging, at, bytes);
+            at += bytes;
+        }
         self.ctx.queue.submit([enc.finish()]);
-        let bytes = self.map_read(&staging)?;
         self.counters.readbacks += 1;
+        let mut bytes = self.map_read(&staging)?;
+        bytes.truncate(total as usize);
+        Ok(bytes)
+    }
+
+    /// Reads the current nodal displacements and half-step velocities (one extra readback).
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the device is lost.
+    pub fn nodes(&mut self) -> Result<(NodalField, NodalField)> {
+        let nn = self.names.nodes as u64;
+        let nodes = self.state.nodes.clone();
+        let bytes = self.read_copies("nodes_readback", &[(&nodes, 0, 16 * nn)])?;
         let f: &[f32] = bytemuck::cast_slice(&bytes);
         let n = nn as usize;
         Ok((
@@ -726,22 +739,13 @@ impl GpuSolver {
         let n = p.n_slots as u64;
         let off_bytes = 4 * (n + 1);
         let cand_bytes = 4 * p.cand_capacity as u64;
-        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("candidates_readback"),
-            size: off_bytes + cand_bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = self
-            .ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("candidates"),
-            });
-        enc.copy_buffer_to_buffer(&ws, 4 * p.o_coff as u64, &staging, 0, off_bytes);
-        enc.copy_buffer_to_buffer(&grow, 0, &staging, off_bytes, cand_bytes);
-        self.ctx.queue.submit([enc.finish()]);
-        let bytes = self.map_read(&staging)?;
+        let bytes = self.read_copies(
+            "candidates_readback",
+            &[
+                (&ws, 4 * p.o_coff as u64, off_bytes),
+                (&grow, 0, cand_bytes),
+            ],
+        )?;
         let w: &[u32] = bytemuck::cast_slice(&bytes);
         let (off, cand) = w.split_at(n as usize + 1);
         Ok((0..n as usize)
@@ -769,12 +773,6 @@ impl GpuSolver {
             .queue
             .write_buffer(&self.state.nodes, 0, bytemuck::cast_slice(&data));
         let ne = self.state.params.n_elems as u64;
-        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("element_readback"),
-            size: 36 * ne.max(1),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let mut enc = self
             .ctx
             .device
@@ -788,10 +786,12 @@ impl GpuSolver {
             });
             self.state.record_element(&self.kernels, &mut pass);
         }
-        enc.copy_buffer_to_buffer(&self.state.elem_force, 0, &staging, 0, 32 * ne);
-        enc.copy_buffer_to_buffer(&self.state.elem_dt, 0, &staging, 32 * ne, 4 * ne);
         self.ctx.queue.submit([enc.finish()]);
-        let bytes = self.map_read(&staging)?;
+        let (force, dt) = (self.state.elem_force.clone(), self.state.elem_dt.clone());
+        let bytes = self.read_copies(
+            "element_readback",
+            &[(&force, 0, 32 * ne), (&dt, 0, 4 * ne)],
+        )?;
         let f: &[f32] = bytemuck::cast_slice(&bytes);
         let n = ne as usize;
         let forces = (0..n)

@@ -116,7 +116,7 @@ pub struct ContactCounters {
     pub searches: u32,
     pub grow: u32,
     pub lagrange: u32,
-    pub new_cons: u32,
+    pub _reserved: u32,
     pub sweeps: u32,
     pub sweeps_total: u32,
     pub sweeps_max: u32,
