@@ -47,6 +47,9 @@ pub enum Error {
     /// The verification suite could not be run (a case file, a run or a report).
     #[error("verify: {0}")]
     Verify(String),
+    /// A picture could not be drawn or encoded (`ricochet plot`).
+    #[error("plot: {0}")]
+    Plot(String),
     /// The GPU backend could not be used.
     #[error("GPU: {0}")]
     Gpu(String),

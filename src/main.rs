@@ -80,6 +80,27 @@ enum Command {
         /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
         #[arg(long)]
         adapter: Option<String>,
+        /// Then draw the pictures of the run (as `ricochet plot OUT`).
+        #[arg(long)]
+        plots: bool,
+    },
+    /// Draw a run's pictures from its output folder into OUT/plots/: energies, contact forces and
+    /// body velocities against time, and the deformed mesh filled by a field at chosen snapshots.
+    Plot {
+        /// The run's output folder (with history.csv, summary.json, fields.pvd).
+        out: PathBuf,
+        /// Field of the field pictures (default von_mises).
+        #[arg(long, value_parser = ["von_mises", "pressure", "velocity", "displacement", "plastic_strain"])]
+        field: Option<String>,
+        /// Snapshot times (s): the snapshot nearest each; default all, or 12 evenly spaced.
+        #[arg(long, num_args = 1.., allow_negative_numbers = true)]
+        times: Vec<f64>,
+        /// Also write field_<name>.gif with the chosen snapshots as frames.
+        #[arg(long)]
+        animate: bool,
+        /// Picture format.
+        #[arg(long, value_enum, default_value = "png")]
+        format: PlotFormat,
     },
     /// Throughput benchmark on a generated N x N block (no contact), with the full step over the
     /// bare element-and-update loop and the cost of a contact pair, in the same run; and, with
@@ -143,6 +164,14 @@ enum Command {
         #[arg(long)]
         adapter: Option<String>,
     },
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum PlotFormat {
+    /// PNG.
+    Png,
+    /// SVG.
+    Svg,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -385,6 +414,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             out,
             end_time,
             adapter,
+            plots,
         } => {
             let (scene, model, plan) = load(&scene, end_time)?;
             let out = out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
@@ -452,13 +482,66 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     );
                 }
             }
-            if s.status != "completed" {
+            let failed = s.status != "completed";
+            if failed {
                 eprintln!("error: {}", s.message);
-                return Ok(ExitCode::from(EXIT_FAILED_RUN));
             }
+            if plots {
+                draw(&out, &ricochet::plot::PlotOptions::default())?;
+            }
+            Ok(ExitCode::from(if failed { EXIT_FAILED_RUN } else { 0 }))
+        }
+        Command::Plot {
+            out,
+            field,
+            times,
+            animate,
+            format,
+        } => {
+            let opts = ricochet::plot::PlotOptions {
+                field: field
+                    .as_deref()
+                    .and_then(ricochet::plot::field::Field::parse),
+                times,
+                animate,
+                format: match format {
+                    PlotFormat::Png => ricochet::plot::Format::Png,
+                    PlotFormat::Svg => ricochet::plot::Format::Svg,
+                },
+            };
+            draw(&out, &opts)?;
             Ok(ExitCode::SUCCESS)
         }
     }
+}
+
+/// Draws the pictures of the run in `out` and says where they went.
+fn draw(out: &Path, opts: &ricochet::plot::PlotOptions) -> anyhow::Result<()> {
+    let t0 = std::time::Instant::now();
+    let report = ricochet::plot::plot(out, opts)?;
+    for note in &report.notes {
+        eprintln!("note: {note}");
+    }
+    let field = match (report.field, report.range) {
+        (Some(f), Some((lo, hi))) => format!(
+            ", {} {} pictures on [{lo:.4e}, {hi:.4e}]{}",
+            report.pictures.len(),
+            f.name(),
+            if report.gif_frames > 0 {
+                format!(" and a GIF of {} frames", report.gif_frames)
+            } else {
+                String::new()
+            }
+        ),
+        _ => String::new(),
+    };
+    println!(
+        "plots: {} files in {}{field} ({:.2} s)",
+        report.files.len(),
+        report.dir.display(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(())
 }
 
 fn progress_bar() -> Option<indicatif::ProgressBar> {

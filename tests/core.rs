@@ -22,6 +22,8 @@
 //!   printing it, no contact state without contact, and `ricochet bench` reporting its ratios;
 //! - [`bad_input`]: every rejected scene exits with status 2 and names the file, key and value;
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs;
+//! - [`plot`]: `ricochet plot` and `run --plots`: every picture at its size, identical bytes twice,
+//!   GIF frames, the colour of the patch test's uniform stress, refused folders and fields;
 //! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound.
 
 #[path = "core/common.rs"]
@@ -47,6 +49,8 @@ mod patch;
 mod patch_contact;
 #[path = "core/plan.rs"]
 mod plan;
+#[path = "core/plot.rs"]
+mod plot;
 #[path = "core/rigid.rs"]
 mod rigid;
 #[path = "core/stress.rs"]

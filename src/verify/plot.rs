@@ -3,44 +3,22 @@
 //! 1 and 2 given the case's cost exponent (wall time ~ size^k: error ~ time^(-p/k)).
 
 use std::path::Path;
-use std::sync::Once;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::FontStyle;
 
 use super::case::Case;
 use super::Row;
 use crate::error::{Error, Result};
-
-/// The font of the plots' text (DejaVu Sans, see `assets/fonts/DejaVuSans-LICENSE.txt`), embedded so
-/// that plots need no system fonts.
-const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+use crate::plot::style::PALETTE;
 
 fn register_font() -> Result<()> {
-    static ONCE: Once = Once::new();
-    let mut ok = true;
-    ONCE.call_once(|| {
-        ok = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).is_ok();
-    });
-    if ok {
+    if crate::plot::style::register_font() {
         Ok(())
     } else {
         Err(Error::Verify("the embedded plot font is invalid".into()))
     }
 }
-
-/// Series colours (distinct on white, colour-blind friendly order).
-const PALETTE: [RGBColor; 8] = [
-    RGBColor(0, 114, 178),
-    RGBColor(213, 94, 0),
-    RGBColor(0, 158, 115),
-    RGBColor(204, 121, 167),
-    RGBColor(86, 180, 233),
-    RGBColor(230, 159, 0),
-    RGBColor(120, 120, 120),
-    RGBColor(0, 0, 0),
-];
 
 /// One series: a label and its (wall seconds, error) points by level.
 type Series = (String, Vec<(f64, f64)>);

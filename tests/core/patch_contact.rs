@@ -18,7 +18,7 @@ use ricochet::step::{Event, Sample, Solver};
 use crate::common::*;
 
 #[path = "../shared/patch_scene.rs"]
-mod patch_scene;
+pub mod patch_scene;
 use patch_scene::*;
 
 /// What a settled run gives.

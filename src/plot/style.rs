@@ -1,0 +1,58 @@
+//! What every picture ricochet draws shares: the embedded font, the series colours and the colour
+//! map of the field pictures.
+
+use std::sync::OnceLock;
+
+use plotters::style::{FontStyle, RGBColor};
+
+/// The font of the plots' text (DejaVu Sans, see `assets/fonts/DejaVuSans-LICENSE.txt`), embedded
+/// so that plots need no system fonts.
+const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// Registers the embedded font as plotters' `sans-serif` (once per process); false when the
+/// embedded font is invalid.
+pub fn register_font() -> bool {
+    static OK: OnceLock<bool> = OnceLock::new();
+    *OK.get_or_init(|| {
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).is_ok()
+    })
+}
+
+/// Series colours (distinct on white, colour-blind friendly order, Okabe-Ito).
+pub const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(86, 180, 233),
+    RGBColor(230, 159, 0),
+    RGBColor(120, 120, 120),
+    RGBColor(0, 0, 0),
+];
+
+/// Entries of the field colour map: values are binned into this many colours (the colour bar shows
+/// the same bins).
+pub const LEVELS: usize = 256;
+
+/// The colour of bin `k` (0 ..= [`LEVELS`] - 1) of the field colour map: viridis (perceptually
+/// uniform, readable in grey and by colour-blind readers), from `colorous`.
+pub fn level_colour(k: usize) -> [u8; 3] {
+    let c = colorous::VIRIDIS.eval_rational(k.min(LEVELS - 1), LEVELS);
+    [c.r, c.g, c.b]
+}
+
+/// The bin of value `v` on the range `lo..hi` (`lo < hi`): values outside clamp to the ends, NaN
+/// to the first bin.
+pub fn level(v: f64, lo: f64, hi: f64) -> usize {
+    let t = (v - lo) / (hi - lo);
+    if t.is_nan() || t <= 0.0 {
+        0
+    } else {
+        ((t * LEVELS as f64) as usize).min(LEVELS - 1)
+    }
+}
+
+/// The colour map's colour for `v` on `lo..hi`: `level_colour(level(v, lo, hi))`.
+pub fn colour(v: f64, lo: f64, hi: f64) -> [u8; 3] {
+    level_colour(level(v, lo, hi))
+}
