@@ -95,6 +95,10 @@ enum Command {
         /// Snapshot times (s): the snapshot nearest each; default all, or 12 evenly spaced.
         #[arg(long, num_args = 1.., allow_negative_numbers = true)]
         times: Vec<f64>,
+        /// Colour range LO HI of the field pictures (default: the smallest and largest value over
+        /// the chosen snapshots); values outside take the end colours.
+        #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true)]
+        range: Option<Vec<f64>>,
         /// Also write field_<name>.gif with the chosen snapshots as frames.
         #[arg(long)]
         animate: bool,
@@ -495,6 +499,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             out,
             field,
             times,
+            range,
             animate,
             format,
         } => {
@@ -503,6 +508,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     .as_deref()
                     .and_then(ricochet::plot::field::Field::parse),
                 times,
+                range: range.map(|r| (r[0], r[1])),
                 animate,
                 format: match format {
                     PlotFormat::Png => ricochet::plot::Format::Png,

@@ -63,6 +63,9 @@ pub struct PlotOptions {
     /// Snapshot times: for each, the snapshot nearest to it; empty: the default choice
     /// ([`DEFAULT_SNAPSHOTS`]).
     pub times: Vec<f64>,
+    /// Colour range of the field pictures (lo < hi); `None`: the smallest and largest value over
+    /// the chosen snapshots.
+    pub range: Option<(f64, f64)>,
     /// Also write `field_<name>.gif`.
     pub animate: bool,
     /// Picture format.
@@ -362,7 +365,18 @@ pub fn plot(dir: &Path, opts: &PlotOptions) -> Result<PlotReport> {
         .iter()
         .map(|s| s.iter().map(|p| field.values(p)).collect())
         .collect();
-    let range = field::range(values.iter().flatten().flatten());
+    let range = match opts.range {
+        Some((lo, hi)) if lo.is_finite() && hi.is_finite() && lo < hi => (lo, hi),
+        Some((lo, hi)) => {
+            return Err(Error::Invalid {
+                file: dir.to_path_buf(),
+                key: "--range".into(),
+                value: format!("{lo} {hi}"),
+                reason: "must be two finite values, the first below the second".into(),
+            })
+        }
+        None => field::range(values.iter().flatten().flatten()),
+    };
     let mut bbox = (
         f64::INFINITY,
         f64::NEG_INFINITY,

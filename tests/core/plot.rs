@@ -112,6 +112,32 @@ fn run_plots_draws_every_picture_of_the_vibrating_block() {
     assert_eq!(frames, report.pictures.len());
     assert_eq!(frames, report.gif_frames);
     assert_eq!(frames, chosen);
+    // SVG: the same pictures as vector files of the stated size.
+    plot(
+        &out,
+        &PlotOptions {
+            format: ricochet::plot::Format::Svg,
+            ..PlotOptions::default()
+        },
+    )
+    .expect("plot svg");
+    for name in [
+        "energies.svg",
+        "velocities.svg",
+        "field_von_mises_00000.svg",
+    ] {
+        let text = std::fs::read_to_string(plots.join(name)).expect(name);
+        let (w, h) = if name.starts_with("field") {
+            field::SIZE
+        } else {
+            charts::SIZE
+        };
+        assert!(
+            text.starts_with(&format!("<svg width=\"{w}\" height=\"{h}\"")),
+            "{name}: {:.80}",
+            text
+        );
+    }
 }
 
 #[test]
