@@ -42,7 +42,7 @@ fn draw(c: &mut Criterion) {
         let window = Window::around((0.0, 1.1, -0.05, 1.05));
         let layers = vec![Layer {
             piece: &piece,
-            values: values.clone(),
+            values: &values,
         }];
         let frame = Frame {
             edges: edges_readable(&layers, &window),

@@ -5,7 +5,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::read::History;
-use super::style::PALETTE;
+use super::style::{text, tick, PALETTE};
 
 /// Width and height of a chart in pixels.
 pub const SIZE: (u32, u32) = (1000, 600);
@@ -63,10 +63,6 @@ pub fn velocity_lines(h: &History) -> Vec<Line> {
         .collect()
 }
 
-fn text<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
-    e.to_string()
-}
-
 fn bounds<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for &v in values.filter(|v| v.is_finite()) {
@@ -84,18 +80,6 @@ fn bounds<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
         1.0
     };
     (lo - pad, hi + pad)
-}
-
-fn tick(v: f64, span: f64) -> String {
-    let a = v.abs();
-    if a <= 1e-9 * span {
-        "0".into()
-    } else if !(1e-2..1e4).contains(&a) {
-        format!("{v:.2e}")
-    } else {
-        let s = format!("{v:.4}");
-        s.trim_end_matches('0').trim_end_matches('.').into()
-    }
 }
 
 /// Draws `lines` against `time` on `root`, with `error` (label, values) on a second axis at the
@@ -147,8 +131,8 @@ pub fn draw<DB: DrawingBackend>(
         .y_desc(y_desc)
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
-        .x_label_formatter(&|v| tick(*v, t1 - t0))
-        .y_label_formatter(&|v| tick(*v, y1 - y0))
+        .x_label_formatter(&|v| tick(*v, t1 - t0, 1e-2..1e4))
+        .y_label_formatter(&|v| tick(*v, y1 - y0, 1e-2..1e4))
         .light_line_style(WHITE)
         .bold_line_style(BLACK.mix(0.08))
         .draw()

@@ -5,7 +5,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::read::Piece;
-use super::style::{level, level_colour, LEVELS};
+use super::style::{level, level_colour, text, tick, LEVELS};
 
 /// Fields a picture can show, each one value per element.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -132,7 +132,7 @@ pub struct Layer<'a> {
     /// The body's deformed mesh.
     pub piece: &'a Piece,
     /// One value per cell.
-    pub values: Vec<f64>,
+    pub values: &'a [f64],
 }
 
 /// The data window and the pixel window of a field picture's plotting area, the same for every
@@ -223,6 +223,18 @@ pub struct Frame<'a> {
     pub edges: bool,
 }
 
+/// The corner coordinates of cell `c` of `piece`, in order.
+fn corners(piece: &Piece, c: usize) -> Vec<(f64, f64)> {
+    piece
+        .cell(c)
+        .iter()
+        .map(|&i| {
+            let p = piece.points[i as usize];
+            (p[0], p[1])
+        })
+        .collect()
+}
+
 /// Whether the mesh is coarse enough on screen for element edges to be read: at least 10 x 10
 /// pixels per cell on average.
 pub fn edges_readable(layers: &[Layer<'_>], window: &Window) -> bool {
@@ -233,41 +245,18 @@ pub fn edges_readable(layers: &[Layer<'_>], window: &Window) -> bool {
     let mut area = 0.0;
     for l in layers {
         for c in 0..l.piece.cells() {
-            let p: Vec<[f64; 2]> = l
-                .piece
-                .cell(c)
-                .iter()
-                .map(|&i| l.piece.points[i as usize])
-                .collect();
+            let p = corners(l.piece, c);
             let n = p.len();
             let mut a = 0.0;
             for k in 0..n {
                 let (q, r) = (p[k], p[(k + 1) % n]);
-                a += q[0] * r[1] - r[0] * q[1];
+                a += q.0 * r.1 - r.0 * q.1;
             }
             area += 0.5 * a.abs();
         }
     }
     let per_px = (window.x.1 - window.x.0) / (window.px.1 - window.px.0) as f64;
     area / (per_px * per_px) / cells as f64 >= 100.0
-}
-
-/// A plotters error as text.
-fn text<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
-    e.to_string()
-}
-
-/// Axis tick labels: a few significant digits, 0 for values within round-off of zero.
-fn tick(v: f64, span: f64) -> String {
-    let a = v.abs();
-    if a <= 1e-9 * span {
-        "0".into()
-    } else if !(1e-3..1e4).contains(&a) {
-        format!("{v:.2e}")
-    } else {
-        let s = format!("{v:.4}");
-        s.trim_end_matches('0').trim_end_matches('.').into()
-    }
 }
 
 /// Draws the frame onto `root` ([`SIZE`]): title, axes, the cells filled by the colour map, edges
@@ -280,7 +269,7 @@ pub fn draw<DB: DrawingBackend>(
     frame: &Frame<'_>,
 ) -> std::result::Result<(), String> {
     root.fill(&WHITE).map_err(text)?;
-    let (w, h) = SIZE;
+    let w = SIZE.0;
     let w_ = &frame.window;
     let title = format!("{}, t = {:.4e} s", frame.field.label(), frame.time);
     root.draw(&Text::new(
@@ -306,8 +295,8 @@ pub fn draw<DB: DrawingBackend>(
         .axis_desc_style(("sans-serif", 16))
         .x_labels(8)
         .y_labels(8)
-        .x_label_formatter(&|v| tick(*v, w_.x.1 - w_.x.0))
-        .y_label_formatter(&|v| tick(*v, w_.y.1 - w_.y.0))
+        .x_label_formatter(&|v| tick(*v, w_.x.1 - w_.x.0, 1e-3..1e4))
+        .y_label_formatter(&|v| tick(*v, w_.y.1 - w_.y.0, 1e-3..1e4))
         .draw()
         .map_err(text)?;
     let (lo, hi) = frame.range;
@@ -316,15 +305,7 @@ pub fn draw<DB: DrawingBackend>(
         let piece = layer.piece;
         for c in 0..piece.cells() {
             let [r, g, b] = level_colour(level(layer.values[c], lo, hi));
-            let pts: Vec<(f64, f64)> = piece
-                .cell(c)
-                .iter()
-                .map(|&i| {
-                    let p = piece.points[i as usize];
-                    (p[0], p[1])
-                })
-                .collect();
-            area.draw(&Polygon::new(pts, RGBColor(r, g, b).filled()))
+            area.draw(&Polygon::new(corners(piece, c), RGBColor(r, g, b).filled()))
                 .map_err(text)?;
         }
     }
@@ -333,14 +314,7 @@ pub fn draw<DB: DrawingBackend>(
         for layer in &frame.layers {
             let piece = layer.piece;
             for c in 0..piece.cells() {
-                let mut pts: Vec<(f64, f64)> = piece
-                    .cell(c)
-                    .iter()
-                    .map(|&i| {
-                        let p = piece.points[i as usize];
-                        (p[0], p[1])
-                    })
-                    .collect();
+                let mut pts = corners(piece, c);
                 if let Some(&first) = pts.first() {
                     pts.push(first);
                 }
@@ -375,7 +349,6 @@ pub fn draw<DB: DrawingBackend>(
         Rectangle::new([(0.0, a), (1.0, b)], RGBColor(r, g, bl).filled())
     });
     bar_chart.draw_series(bands).map_err(text)?;
-    let _ = h;
     root.present().map_err(text)?;
     Ok(())
 }

@@ -417,10 +417,7 @@ pub fn plot(dir: &Path, opts: &PlotOptions) -> Result<PlotReport> {
         let layers: Vec<Layer<'_>> = pieces[j]
             .iter()
             .zip(&values[j])
-            .map(|(piece, v)| Layer {
-                piece,
-                values: v.clone(),
-            })
+            .map(|(piece, v)| Layer { piece, values: v })
             .collect();
         let edges = *edges.get_or_insert_with(|| field::edges_readable(&layers, &window));
         let frame = Frame {

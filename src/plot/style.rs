@@ -3,6 +3,7 @@
 
 use std::sync::OnceLock;
 
+use plotters::drawing::DrawingAreaErrorKind;
 use plotters::style::{FontStyle, RGBColor};
 
 /// The font of the plots' text (DejaVu Sans, see `assets/fonts/DejaVuSans-LICENSE.txt`), embedded
@@ -55,4 +56,23 @@ pub fn level(v: f64, lo: f64, hi: f64) -> usize {
 /// The colour map's colour for `v` on `lo..hi`: `level_colour(level(v, lo, hi))`.
 pub fn colour(v: f64, lo: f64, hi: f64) -> [u8; 3] {
     level_colour(level(v, lo, hi))
+}
+
+/// A plotters drawing error as text.
+pub(crate) fn text<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
+    e.to_string()
+}
+
+/// Axis tick labels: `v` with a few significant digits, in exponent form outside `plain`, and 0
+/// for values within round-off of zero on an axis spanning `span`.
+pub(crate) fn tick(v: f64, span: f64, plain: std::ops::Range<f64>) -> String {
+    let a = v.abs();
+    if a <= 1e-9 * span {
+        "0".into()
+    } else if !plain.contains(&a) {
+        format!("{v:.2e}")
+    } else {
+        let s = format!("{v:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').into()
+    }
 }
