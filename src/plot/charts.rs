@@ -5,7 +5,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::read::History;
-use super::style::{text, tick, PALETTE};
+use super::style::{finite_extent, text, tick, PALETTE};
 
 /// Width and height of a chart in pixels.
 pub const SIZE: (u32, u32) = (1000, 600);
@@ -63,15 +63,11 @@ pub fn velocity_lines(h: &History) -> Vec<Line> {
         .collect()
 }
 
+/// The axis range of `values`: their finite extent with 5 % of room on each side.
 fn bounds<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for &v in values.filter(|v| v.is_finite()) {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    if lo > hi {
+    let Some((lo, hi)) = finite_extent(values) else {
         return (0.0, 1.0);
-    }
+    };
     let pad = if hi > lo {
         0.05 * (hi - lo)
     } else if hi != 0.0 {

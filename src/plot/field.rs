@@ -5,7 +5,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::read::Piece;
-use super::style::{level, level_colour, text, tick, LEVELS};
+use super::style::{finite_extent, level, level_colour, text, tick, LEVELS};
 
 /// Fields a picture can show, each one value per element.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -184,16 +184,12 @@ impl Window {
     }
 }
 
-/// The smallest and largest finite values of `layers`, widened when they coincide.
+/// The colour range of `values`: the smallest and largest finite value, widened when they
+/// coincide; (0, 1) when there is none.
 pub fn range<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for &v in values.filter(|v| v.is_finite()) {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    if lo > hi {
+    let Some((lo, hi)) = finite_extent(values) else {
         return (0.0, 1.0);
-    }
+    };
     let span = hi - lo;
     if span <= 1e-9 * hi.abs().max(lo.abs()) || span == 0.0 {
         let d = if hi.abs().max(lo.abs()) > 0.0 {

@@ -276,46 +276,40 @@ pub fn plot(dir: &Path, opts: &PlotOptions) -> Result<PlotReport> {
     let ext = opts.format.extension();
     let time = history.values(0);
 
-    let path = out.join(format!("energies.{ext}"));
     let error = history
         .column("energy_error")
         .map(|k| ("balance error".to_string(), history.values(k)));
-    chart(
-        &path,
-        opts.format,
-        &format!("energies ({label})"),
-        "energy [J; J/m in plane strain]",
-        &time,
-        &charts::energy_lines(&history),
-        error.as_ref(),
-    )?;
-    report.files.push(path);
-    let forces = charts::force_lines(&history);
-    if !forces.is_empty() {
-        let path = out.join(format!("contact_forces.{ext}"));
-        chart(
-            &path,
-            opts.format,
-            &format!("contact and wall forces ({label})"),
+    let charts_drawn = [
+        (
+            "energies",
+            "energies",
+            "energy [J; J/m in plane strain]",
+            charts::energy_lines(&history),
+            error.as_ref(),
+        ),
+        (
+            "contact_forces",
+            "contact and wall forces",
             "force [N; N/m in plane strain]",
-            &time,
-            &forces,
+            charts::force_lines(&history),
             None,
-        )?;
-        report.files.push(path);
-    }
-    let velocities = charts::velocity_lines(&history);
-    if !velocities.is_empty() {
-        let path = out.join(format!("velocities.{ext}"));
-        chart(
-            &path,
-            opts.format,
-            &format!("rigid-body velocities ({label})"),
+        ),
+        (
+            "velocities",
+            "rigid-body velocities",
             "velocity [m/s]",
-            &time,
-            &velocities,
+            charts::velocity_lines(&history),
             None,
-        )?;
+        ),
+    ];
+    for (name, title, y_desc, lines, error) in &charts_drawn {
+        // The energy chart always; the others when the run has their columns.
+        if lines.is_empty() && *name != "energies" {
+            continue;
+        }
+        let path = out.join(format!("{name}.{ext}"));
+        let title = format!("{title} ({label})");
+        chart(&path, opts.format, &title, y_desc, &time, lines, *error)?;
         report.files.push(path);
     }
 

@@ -76,3 +76,13 @@ pub(crate) fn tick(v: f64, span: f64, plain: std::ops::Range<f64>) -> String {
         s.trim_end_matches('0').trim_end_matches('.').into()
     }
 }
+
+/// The smallest and largest finite values, or `None` when there are none.
+pub(crate) fn finite_extent<'a>(values: impl Iterator<Item = &'a f64>) -> Option<(f64, f64)> {
+    values
+        .filter(|v| v.is_finite())
+        .fold(None, |acc, &v| match acc {
+            None => Some((v, v)),
+            Some((lo, hi)) => Some((f64::min(lo, v), f64::max(hi, v))),
+        })
+}
