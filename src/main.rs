@@ -28,7 +28,9 @@ struct Cli {
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Backend {
-    /// The GPU when an adapter exists, else the CPU (with a notice).
+    /// The GPU when a hardware adapter exists (or --adapter / WGPU_ADAPTER_NAME names one), else
+    /// the CPU reference, with a one-line notice (a software adapter such as Mesa lavapipe is
+    /// slower than the CPU reference).
     Auto,
     /// The f64 CPU reference.
     Cpu,
@@ -429,6 +431,14 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let mut solver: Box<dyn Solver> = match backend {
                 Backend::Cpu => cpu(),
                 Backend::Auto => match GpuContext::new(adapter.as_deref()) {
+                    Ok(ctx) if ctx.is_software() && !adapter_named(adapter.as_deref()) => {
+                        eprintln!(
+                            "notice: the only GPU adapter is a software one ({}): running on the \
+                             CPU reference, which is faster here (--backend gpu uses the adapter)",
+                            ctx.adapter_name()
+                        );
+                        cpu()
+                    }
                     Ok(ctx) => Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?),
                     Err(e) => {
                         eprintln!("notice: {e}; running on the CPU");
@@ -519,6 +529,12 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
     }
+}
+
+/// Whether the user named an adapter (`--adapter` or `WGPU_ADAPTER_NAME`).
+fn adapter_named(adapter: Option<&str>) -> bool {
+    adapter.is_some_and(|a| !a.is_empty())
+        || std::env::var("WGPU_ADAPTER_NAME").is_ok_and(|a| !a.is_empty())
 }
 
 /// Draws the pictures of the run in `out` and says where they went.

@@ -125,6 +125,12 @@ impl GpuContext {
             .map_err(Error::Gpu)
     }
 
+    /// Whether the adapter is a software implementation on the CPU (Mesa lavapipe / llvmpipe,
+    /// WARP, SwiftShader): `--backend auto` prefers the CPU reference over it.
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Adapter description for reports.
     pub fn adapter_name(&self) -> String {
         describe(&self.info)

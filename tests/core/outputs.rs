@@ -171,6 +171,52 @@ fn check_vtu_with_meshio(dir: &Path, files: usize, points: u64, cells: u64, bbox
 }
 
 #[test]
+fn auto_backend_prefers_the_cpu_reference_over_a_software_adapter() {
+    // What auto should pick on this machine: the GPU only when the most capable adapter is
+    // hardware; with a software one (lavapipe in CI) or none, the CPU reference with a notice.
+    let best = ricochet::gpu::GpuContext::new(None);
+    let hardware = best.as_ref().is_ok_and(|c| !c.is_software());
+    let dir = tmp_dir("outputs-auto");
+    let scene = asset("vibrating_block.toml");
+    let run = |extra: &[&str]| {
+        let mut cmd = std::process::Command::new(bin());
+        cmd.args([
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .args(extra)
+        .env_remove("WGPU_ADAPTER_NAME");
+        cmd.output().expect("run the binary")
+    };
+    let o = run(&[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let backend = summary(&dir)["backend"].as_str().unwrap().to_string();
+    if hardware {
+        assert_eq!(backend, "gpu", "{err}");
+    } else {
+        assert_eq!(backend, "cpu", "{err}");
+        let said = match &best {
+            Ok(_) => "the only GPU adapter is a software one",
+            Err(_) => "no GPU adapter",
+        };
+        assert!(err.contains(said) && err.lines().count() == 1, "{err}");
+    }
+    // Naming the software adapter takes it.
+    if let Ok(ctx) = &best {
+        if ctx.is_software() {
+            let name = ctx.info.name.clone();
+            let o = run(&["--adapter", &name]);
+            assert_eq!(o.status.code(), Some(0));
+            assert_eq!(summary(&dir)["backend"], "gpu");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn end_time_override_and_check() {
     let dir = tmp_dir("outputs-override");
     let scene = asset("vibrating_block.toml");
