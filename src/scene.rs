@@ -8,6 +8,9 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 
+/// Longest body name (bytes).
+pub const NAME_MAX: usize = 64;
+
 /// Default safety factor on the stable time step.
 pub const DEFAULT_TIME_STEP_SCALE: f64 = 0.9;
 /// Default linear bulk-viscosity coefficient (as in common explicit codes).
@@ -562,6 +565,7 @@ impl Validator<'_> {
         let mut bodies: Vec<Body> = Vec::new();
         for (i, b) in raw.body.iter().enumerate() {
             let key = format!("body[{i}]");
+            self.check_name(&format!("{key}.name"), &b.name)?;
             if bodies.iter().any(|o| o.name == b.name) {
                 return Err(self.invalid(
                     format!("{key}.name"),
@@ -634,14 +638,40 @@ impl Validator<'_> {
                 "another contact or rigid wall has this name (give each a distinct `name`)",
             ));
         }
-        if name.is_empty() || name.contains([',', '"', '\n']) {
+        if name.is_empty() || name.contains([',', '"']) || name.chars().any(char::is_control) {
+            let shown: String = name.chars().take(40).collect();
             return Err(self.invalid(
                 format!("{key}.name"),
-                format!("{name:?}"),
-                "must be non-empty, without commas, quotes or newlines (it names history columns)",
+                format!("{shown:?}"),
+                "must be non-empty, without commas, quotes or control characters (it names \
+                 history columns)",
             ));
         }
         Ok(())
+    }
+
+    /// Body names become file names (`fields/<body>_<k>.vtu`) and `history.csv` headers: 1 to
+    /// [`NAME_MAX`] ASCII letters, digits, `_`, `-` and `.`, not starting with `.` or `-`.
+    fn check_name(&self, key: &str, name: &str) -> Result<()> {
+        let ok = !name.is_empty()
+            && name.len() <= NAME_MAX
+            && name
+                .bytes()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, b'_' | b'-' | b'.'))
+            && !name.starts_with(['.', '-']);
+        if ok {
+            return Ok(());
+        }
+        let shown: String = name.chars().take(40).collect();
+        let more = if name.chars().count() > 40 { "..." } else { "" };
+        Err(self.invalid(
+            key,
+            format!("{shown:?}{more}"),
+            &format!(
+                "a name must be 1 to {NAME_MAX} ASCII letters, digits, `_`, `-` or `.`, not \
+                 starting with `.` or `-` (names become file names and history.csv columns)"
+            ),
+        ))
     }
 
     fn body_index(&self, key: &str, name: &str, bodies: &[Body]) -> Result<usize> {

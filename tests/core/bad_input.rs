@@ -51,10 +51,11 @@ fn stderr(o: &Output) -> String {
 
 /// Runs `check` and `run` on the scene; both must exit with 2 and name the file and every
 /// string of `needles` on stderr.
-fn expect_rejected(case: &str, text: &str, needles: &[&str]) {
+fn expect_rejected(case: &str, text: &str, needles: &[&str]) -> String {
     let (dir, file) = write_scene(case, text);
     let f = file.to_str().unwrap();
     let out = dir.join("out");
+    let mut last = String::new();
     for args in [
         vec!["check", f],
         vec!["run", f, "--backend", "cpu", "--out", out.to_str().unwrap()],
@@ -79,12 +80,14 @@ fn expect_rejected(case: &str, text: &str, needles: &[&str]) {
                 "{case}: stderr does not contain {n:?}:\n{err}"
             );
         }
+        last = err;
     }
     assert!(
         !out.join("summary.json").exists(),
         "{case}: a rejected scene must not produce outputs"
     );
     let _ = std::fs::remove_dir_all(&dir);
+    last
 }
 
 #[test]
@@ -139,6 +142,40 @@ fn unknown_material_name() {
         &variant("material = \"steel\"", "material = \"stel\""),
         &["body[0].material", "\"stel\""],
     );
+}
+
+#[test]
+fn body_names_that_would_escape_the_output_folder_or_break_the_history_header() {
+    // Body names become `fields/<name>_<k>.vtu` and `history.csv` columns.
+    let long = "b".repeat(300);
+    for (case, name) in [
+        ("name_parent", "../../escaped"),
+        ("name_absolute", "/tmp/escaped"),
+        ("name_comma", "a,b"),
+        ("name_slash", "a/b"),
+        ("name_nul", "a\\u0000b"),
+        ("name_space", "a b"),
+        ("name_dot", ".hidden"),
+        ("name_empty", ""),
+        ("name_long", long.as_str()),
+    ] {
+        let text = variant("name = \"block\"", &format!("name = \"{name}\""));
+        let err = expect_rejected(case, &text, &["body[0].name", "a name must be 1 to 64"]);
+        assert!(err.len() < 1000, "{case}: message of {} bytes", err.len());
+    }
+    // Allowed: letters, digits, `_`, `-`, `.` inside.
+    let text = variant("name = \"block\"", "name = \"Part_2-a.v1\"");
+    let (dir, file) = write_scene("name_ok", &text);
+    let out = dir.join("out");
+    let o = run_bin(&[
+        "run",
+        file.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 
 #[test]
