@@ -94,6 +94,23 @@ pub fn run(
                 Event::Sample(s) => {
                     let err = audit.error(&s);
                     history.row(&s, err)?;
+                    if !(err.is_finite() && EnergyAudit::total(&s).is_finite()) {
+                        failure = Some(format!(
+                            "step {}, t = {:e} s: the energies are not finite (kinetic {:e}, \
+                             internal {:e}, hourglass {:e}, viscous {:e}, contact {:e}, external \
+                             {:e}): a velocity, load or material value of the scene overflows",
+                            s.step,
+                            s.time,
+                            s.kinetic,
+                            s.internal,
+                            s.hourglass,
+                            s.viscous,
+                            s.contact,
+                            s.external
+                        ));
+                        samples.push((s, f64::INFINITY));
+                        break 'outer;
+                    }
                     if err > scene.run.energy_error_limit {
                         failure = Some(format!(
                             "step {}, t = {:e} s: energy balance error {:.3e} exceeds run.energy_error_limit = {} \
@@ -153,6 +170,7 @@ pub fn run(
         },
         dt_min,
         dt_max,
+        // Over the rows with finite energies (a run with others has failed, saying so).
         max_energy_error: audit.max_error,
         gpu_submissions: counters.submissions,
         gpu_readbacks: counters.readbacks,

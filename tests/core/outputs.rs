@@ -358,6 +358,20 @@ fn every_example_scene_runs() {
     }
 }
 
+#[test]
+fn overflowing_velocity_fails_instead_of_completing_with_non_finite_energies() {
+    // 1e300 m/s is finite, its kinetic energy is not: the run used to say "completed" with a
+    // max_energy_error of 0 over inf and NaN rows.
+    for v in ["[1.0e300, 0.0]", "[0.0, -3.0e200]"] {
+        let text = block_scene("", "linear_elastic", &format!("initial_velocity = {v}"));
+        let (message, _) = expect_failed_run("overflow", &text);
+        assert!(
+            message.contains("the energies are not finite") && message.contains("overflows"),
+            "{v}: {message}"
+        );
+    }
+}
+
 /// A block scene with extra `[run]` lines and body lines.
 fn block_scene(run_extra: &str, model: &str, body_extra: &str) -> String {
     format!(
