@@ -450,12 +450,16 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?)
                 }
             };
+            let signals = Signals::register()?;
             let bar = progress_bar();
             let mut tick = |t: f64, end: f64, steps: u64| {
                 if let Some(b) = &bar {
                     b.set_position((t / end * 10_000.0).min(10_000.0) as u64);
                     b.set_message(format!("t = {t:.4e} s, {steps} steps"));
                 }
+                signals
+                    .caught()
+                    .map(|(name, _)| format!("interrupted by {name}"))
             };
             let result = ricochet::run::run(
                 &scene,
@@ -496,6 +500,14 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     );
                 }
             }
+            if s.status == "interrupted" {
+                eprintln!(
+                    "{}; history, fields and summary.json are complete up to there",
+                    s.message
+                );
+                let code = signals.caught().map(|(_, code)| code).unwrap_or(1);
+                return Ok(ExitCode::from(code));
+            }
             let failed = s.status != "completed";
             if failed {
                 eprintln!("error: {}", s.message);
@@ -527,6 +539,41 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             };
             draw(&out, &opts)?;
             Ok(ExitCode::SUCCESS)
+        }
+    }
+}
+
+/// SIGINT and SIGTERM during a run: each sets a flag that the run checks after every batch of
+/// steps (it then flushes the history and writes `summary.json` with status "interrupted"); a
+/// second signal of the same kind ends the process at once.
+struct Signals {
+    int: Arc<std::sync::atomic::AtomicBool>,
+    term: Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl Signals {
+    fn register() -> anyhow::Result<Self> {
+        use signal_hook::consts::{SIGINT, SIGTERM};
+        use signal_hook::flag;
+        let int = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let term = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        for (sig, f, code) in [(SIGINT, &int, 130), (SIGTERM, &term, 143)] {
+            // Order matters: the conditional shutdown sees the flag set by the first signal.
+            flag::register_conditional_shutdown(sig, code, Arc::clone(f))?;
+            flag::register(sig, Arc::clone(f))?;
+        }
+        Ok(Self { int, term })
+    }
+
+    /// The signal caught, if any: (name, exit status 128 + number).
+    fn caught(&self) -> Option<(&'static str, u8)> {
+        use std::sync::atomic::Ordering::Relaxed;
+        if self.int.load(Relaxed) {
+            Some(("SIGINT", 130))
+        } else if self.term.load(Relaxed) {
+            Some(("SIGTERM", 143))
+        } else {
+            None
         }
     }
 }

@@ -14,8 +14,10 @@ use crate::plan::Plan;
 use crate::scene::Scene;
 use crate::step::{Event, Sample, Schedule, Solver};
 
-/// Progress callback: (simulated time, end time, steps).
-pub type Progress<'a> = &'a mut dyn FnMut(f64, f64, u64);
+/// Progress callback, called after each batch of steps with (simulated time, end time, steps):
+/// `Some(cause)` stops the run there with `status = "interrupted"` and `cause` as its message
+/// (the history is flushed and the summary written as for any other end).
+pub type Progress<'a> = &'a mut dyn FnMut(f64, f64, u64) -> Option<String>;
 
 /// The schedule of a scene's run.
 pub fn schedule(scene: &Scene) -> Schedule {
@@ -82,6 +84,7 @@ pub fn run(
     let mut samples = Vec::new();
     let mut events = Vec::new();
     let mut failure: Option<String> = None;
+    let mut interrupted: Option<String> = None;
     let mut progress = progress;
     let start = Instant::now();
     let mut loop_seconds = 0.0;
@@ -139,7 +142,15 @@ pub fn run(
             }
         }
         if let Some(p) = progress.as_mut() {
-            p(solver.time(), scene.run.end_time, solver.steps());
+            if let Some(cause) = p(solver.time(), scene.run.end_time, solver.steps()) {
+                interrupted = Some(format!(
+                    "{cause} at step {}, t = {:e} s (of {:e} s)",
+                    solver.steps(),
+                    solver.time(),
+                    scene.run.end_time
+                ));
+                break 'outer;
+            }
         }
     }
     history.finish()?;
@@ -150,11 +161,13 @@ pub fn run(
     let summary = Summary {
         status: if failure.is_some() {
             "failed"
+        } else if interrupted.is_some() {
+            "interrupted"
         } else {
             "completed"
         }
         .to_string(),
-        message: failure.unwrap_or_default(),
+        message: failure.or(interrupted).unwrap_or_default(),
         scene: scene.name.clone(),
         backend: solver.backend().to_string(),
         adapter: solver.adapter(),

@@ -15,9 +15,20 @@ pub(crate) fn create_dir(dir: &Path) -> Result<()> {
     })
 }
 
+/// Writes `text` to `path` through a temporary file in the same folder and a rename, so that a
+/// crash or an interruption never leaves `path` empty or cut short (files rewritten during a run:
+/// `fields.pvd`, `summary.json`).
 pub(crate) fn write_file(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).map_err(|source| Error::Write {
-        path: path.to_path_buf(),
-        source,
-    })
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = std::path::PathBuf::from(tmp);
+    std::fs::write(&tmp, text)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .map_err(|source| {
+            let _ = std::fs::remove_file(&tmp);
+            Error::Write {
+                path: path.to_path_buf(),
+                source,
+            }
+        })
 }

@@ -5,9 +5,11 @@ use serde::Serialize;
 /// The run summary written to `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
-    /// "completed" or "failed".
+    /// "completed", "failed" (the run went unstable; see `message`) or "interrupted" (by SIGINT or
+    /// SIGTERM; `message` says where).
     pub status: String,
-    /// Empty when completed; the diagnostic when failed.
+    /// Empty when completed; the diagnostic when failed; the signal, step and time when
+    /// interrupted.
     pub message: String,
     /// Scene name.
     pub scene: String,

@@ -372,6 +372,66 @@ fn overflowing_velocity_fails_instead_of_completing_with_non_finite_energies() {
     }
 }
 
+#[test]
+fn sigint_and_sigterm_end_a_run_with_its_summary_and_complete_history() {
+    for (signal, code) in [("INT", 130), ("TERM", 143)] {
+        let dir = tmp_dir(&format!("outputs-signal-{signal}"));
+        // The disk on a wall for 2 ms (about 10 s on the CPU): interrupted once two snapshots
+        // are written.
+        let child = std::process::Command::new(bin())
+            .args([
+                "run",
+                asset("disk_wall.toml").to_str().unwrap(),
+                "--backend",
+                "cpu",
+                "--end-time",
+                "2e-3",
+                "--out",
+                dir.to_str().unwrap(),
+            ])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("start the run");
+        let start = std::time::Instant::now();
+        while !dir.join("fields/disk_00001.vtu").exists() {
+            assert!(start.elapsed().as_secs() < 60, "no snapshot after 60 s");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        let kill = std::process::Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status()
+            .expect("kill");
+        assert!(kill.success());
+        let out = child.wait_with_output().expect("wait");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "SIG{signal}: {err}");
+        let s = summary(&dir);
+        assert_eq!(s["status"], "interrupted", "SIG{signal}");
+        let message = s["message"].as_str().unwrap();
+        assert!(
+            message.starts_with(&format!("interrupted by SIG{signal} at step ")),
+            "{message}"
+        );
+        assert!(err.contains(message), "{err}");
+        // The history names every row the summary counts, each whole.
+        let (header, rows) = read_csv(&dir.join("history.csv"));
+        assert_eq!(rows.len() as u64, s["history_rows"].as_u64().unwrap());
+        assert!(rows.len() > 1);
+        assert!(rows.iter().all(|r| r.len() == header.len()));
+        let t_end = s["end_time"].as_f64().unwrap();
+        assert!(t_end > 0.0 && t_end < 2e-3, "stopped at {t_end:e}");
+        // fields.pvd lists every snapshot written, whole.
+        let pvd = std::fs::read_to_string(dir.join("fields.pvd")).expect("fields.pvd");
+        assert!(pvd.trim_end().ends_with("</VTKFile>"));
+        assert_eq!(
+            pvd.matches("<DataSet").count() as u64,
+            s["snapshots"].as_u64().unwrap()
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
 /// A block scene with extra `[run]` lines and body lines.
 fn block_scene(run_extra: &str, model: &str, body_extra: &str) -> String {
     format!(
