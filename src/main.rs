@@ -160,9 +160,10 @@ enum Command {
         /// Output folder.
         #[arg(long, default_value = "out/verification")]
         out: PathBuf,
-        /// Folder of the case files.
-        #[arg(long, default_value = "assets/verification")]
-        cases: PathBuf,
+        /// Folder of case files to run instead of the built-in ones (those of
+        /// assets/verification/, embedded in the binary).
+        #[arg(long)]
+        cases: Option<PathBuf>,
         /// Only these cases (by name); all when omitted.
         #[arg(long, num_args = 1..)]
         case: Vec<String>,

@@ -32,8 +32,8 @@ pub struct Options {
     pub cpu: bool,
     /// Run on the GPU (an adapter is required).
     pub gpu: bool,
-    /// Folder of the case files.
-    pub cases: PathBuf,
+    /// Folder of the case files; `None`: the cases built into the binary ([`EMBEDDED`]).
+    pub cases: Option<PathBuf>,
     /// Only the cases with these names (all when empty).
     pub only: Vec<String>,
     /// Output folder.
@@ -92,6 +92,50 @@ pub struct Outcome {
     pub failures: Vec<String>,
 }
 
+/// The case files of `assets/verification/`, built into the binary so that `ricochet verify` runs
+/// from any folder: (file name, text), sorted by file name.
+pub const EMBEDDED: [(&str, &str); 7] = [
+    (
+        "disk_wall_10ms.toml",
+        include_str!("../../assets/verification/disk_wall_10ms.toml"),
+    ),
+    (
+        "disk_wall_1ms.toml",
+        include_str!("../../assets/verification/disk_wall_1ms.toml"),
+    ),
+    (
+        "hertz_rigid.toml",
+        include_str!("../../assets/verification/hertz_rigid.toml"),
+    ),
+    (
+        "impedance_1e4.toml",
+        include_str!("../../assets/verification/impedance_1e4.toml"),
+    ),
+    (
+        "patch_test.toml",
+        include_str!("../../assets/verification/patch_test.toml"),
+    ),
+    (
+        "rod_wall.toml",
+        include_str!("../../assets/verification/rod_wall.toml"),
+    ),
+    (
+        "rods.toml",
+        include_str!("../../assets/verification/rods.toml"),
+    ),
+];
+
+/// The built-in cases ([`EMBEDDED`]), named as their files in `assets/verification/`.
+///
+/// # Errors
+/// The error of the first bad case (none in a tested build).
+pub fn embedded_cases() -> Result<Vec<Case>> {
+    EMBEDDED
+        .iter()
+        .map(|(name, text)| Case::parse(text, &Path::new("assets/verification").join(name)))
+        .collect()
+}
+
 /// Reads the case files of `dir` (sorted by file name).
 ///
 /// # Errors
@@ -115,13 +159,20 @@ pub fn read_cases(dir: &Path) -> Result<Vec<Case>> {
 /// Bad case files, a missing adapter with `gpu`, or outputs that cannot be written. Runs that fail
 /// or miss their bounds are not errors: they are in [`Outcome::failures`].
 pub fn verify(opts: &Options, mut log: impl FnMut(&str)) -> Result<Outcome> {
-    let mut cases = read_cases(&opts.cases)?;
+    let mut cases = match &opts.cases {
+        Some(dir) => read_cases(dir)?,
+        None => embedded_cases()?,
+    };
     if !opts.only.is_empty() {
         for name in &opts.only {
             if !cases.iter().any(|c| &c.case.name == name) {
+                let known: Vec<&str> = cases.iter().map(|c| c.case.name.as_str()).collect();
                 return Err(Error::Verify(format!(
-                    "no case named {name:?} in {}",
-                    opts.cases.display()
+                    "no case named {name:?} in {} (cases: {known:?})",
+                    match &opts.cases {
+                        Some(d) => d.display().to_string(),
+                        None => "the built-in cases".into(),
+                    }
                 )));
             }
         }

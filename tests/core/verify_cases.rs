@@ -9,6 +9,43 @@ use ricochet::verify::{read_cases, Case};
 use crate::common::*;
 
 #[test]
+fn the_built_in_cases_are_the_case_files_and_verify_runs_from_any_folder() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/verification");
+    let files = read_cases(&dir).expect("case files");
+    let built_in = ricochet::verify::embedded_cases().expect("built-in cases");
+    let names = |c: &[Case]| -> Vec<String> { c.iter().map(|c| c.case.name.clone()).collect() };
+    assert_eq!(
+        names(&built_in),
+        names(&files),
+        "EMBEDDED lists every case file"
+    );
+    for (name, text) in ricochet::verify::EMBEDDED {
+        assert_eq!(
+            std::fs::read_to_string(dir.join(name)).expect("case file"),
+            text,
+            "{name}"
+        );
+    }
+    // From a folder without assets/: the built-in cases.
+    let cwd = tmp_dir("verify-anywhere");
+    let o = std::process::Command::new(bin())
+        .current_dir(&cwd)
+        .args(["verify", "--quick", "--backend", "cpu", "--case", "rods"])
+        .output()
+        .expect("run verify");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{out}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.contains("all cases pass their bounds"), "{out}");
+    assert!(cwd.join("out/verification/report.md").exists());
+    let _ = std::fs::remove_dir_all(&cwd);
+}
+
+#[test]
 fn every_case_file_parses_and_expands_into_a_valid_scene_at_every_level() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/verification");
     let cases = read_cases(&dir).expect("case files");
