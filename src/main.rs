@@ -238,6 +238,7 @@ fn load(path: &Path, end_time: Option<f64>) -> anyhow::Result<(Scene, Model, Pla
         scene.run.end_time = t;
     }
     let model = ricochet::run::model(&scene)?;
+    ricochet::run::check_limits(&scene, &model)?;
     let plan = Plan::new(&scene, &model);
     Ok((scene, model, plan))
 }

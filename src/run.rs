@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::model::Model;
 use crate::output::fields::FieldWriter;
 use crate::output::history::{EnergyAudit, HistoryWriter};
@@ -18,6 +18,143 @@ use crate::step::{Event, Sample, Schedule, Solver};
 /// `Some(cause)` stops the run there with `status = "interrupted"` and `cause` as its message
 /// (the history is flushed and the summary written as for any other end).
 pub type Progress<'a> = &'a mut dyn FnMut(f64, f64, u64) -> Option<String>;
+
+/// Most steps a run may take (run.end_time over its first step).
+pub const MAX_STEPS: f64 = 1e9;
+/// Most history rows a run may write (run.end_time / run.history_interval).
+pub const MAX_HISTORY_ROWS: f64 = 1e7;
+/// Most field snapshots a run may write (run.end_time / run.field_interval).
+pub const MAX_SNAPSHOTS: f64 = 1e5;
+
+/// The first step of a run: (the step dt^{1/2}, the elements' stable step, the element that sets
+/// it), with the penalty springs and `time_step_scale` (or the fixed `time_step`) applied, and
+/// the contact that shortened it, if any.
+pub fn first_step(scene: &Scene, model: &Model) -> (f64, f64, usize, Option<String>) {
+    use crate::step::element::{evaluate, Dissipation};
+    let mut best = (f64::INFINITY, 0);
+    for e in 0..model.element_count() {
+        let q = model.quads[e];
+        let out = evaluate(
+            model.params(e),
+            &model.corners[e],
+            &[[0.0; 2]; 4],
+            &q.map(|i| model.velocity[i as usize]),
+            &Dissipation::default(),
+            0.0,
+        );
+        // A NaN step (a degenerate element) is kept as the answer.
+        if out.dt.is_nan() || out.dt < best.0 {
+            best = (out.dt, e);
+        }
+    }
+    let (dt_element, e) = best;
+    let penalty = model
+        .contacts
+        .iter()
+        .map(|c| c.method)
+        .chain(model.walls.iter().map(|w| w.method))
+        .any(|m| m == crate::scene::ContactMethod::Penalty);
+    let (dt_stable, by) = match penalty
+        .then(|| crate::contact::ContactSet::new(model))
+        .flatten()
+    {
+        Some(c) => (
+            c.limit_step(dt_element),
+            c.penalty_step().map(|(_, what)| what.to_string()),
+        ),
+        None => (dt_element, None),
+    };
+    let step = scene
+        .run
+        .time_step
+        .unwrap_or(scene.run.time_step_scale * dt_stable);
+    (step, dt_element, e, by)
+}
+
+/// Refuses a run that would not end in a stated number of steps, history rows or snapshots
+/// ([`MAX_STEPS`], [`MAX_HISTORY_ROWS`], [`MAX_SNAPSHOTS`]), or whose first step is zero or not
+/// finite (a `time_step_scale` or `penalty_scale` at the end of the floating-point range).
+///
+/// # Errors
+/// [`Error::Invalid`] naming the key, the value and the limit.
+pub fn check_limits(scene: &Scene, model: &Model) -> Result<()> {
+    let r = &scene.run;
+    let invalid = |key: &str, value: String, reason: String| Error::Invalid {
+        file: scene.file.clone(),
+        key: key.into(),
+        value,
+        reason,
+    };
+    let rows = r.end_time / r.history_interval;
+    if rows.is_nan() || rows > MAX_HISTORY_ROWS {
+        return Err(invalid(
+            "run.history_interval",
+            format!("{:e}", r.history_interval),
+            format!(
+                "{rows:.3e} history rows to run.end_time = {:e}: more than the limit of {MAX_HISTORY_ROWS:e}",
+                r.end_time
+            ),
+        ));
+    }
+    if let Some(f) = r.field_interval {
+        let n = r.end_time / f;
+        if n.is_nan() || n > MAX_SNAPSHOTS {
+            return Err(invalid(
+                "run.field_interval",
+                format!("{f:e}"),
+                format!(
+                    "{n:.3e} snapshots to run.end_time = {:e}: more than the limit of {MAX_SNAPSHOTS:e}",
+                    r.end_time
+                ),
+            ));
+        }
+    }
+    let (step, dt_element, e, by) = first_step(scene, model);
+    let steps = r.end_time / step;
+    if step.is_nan() || step <= 0.0 || steps.is_nan() || steps > MAX_STEPS {
+        let shortened = by
+            .as_ref()
+            .map(|w| format!(", shortened by the penalty springs of {w}"))
+            .unwrap_or_default();
+        let why = format!(
+            "the first step is {step:e} s (stable step {dt_element:e} s of element {e}{shortened}, \
+             x time_step_scale {:e}): {steps:.3e} steps, more than the limit of {MAX_STEPS:e}",
+            r.time_step_scale
+        );
+        let (key, value) = if r.time_step.is_none() && r.time_step_scale < 1e-3 {
+            (
+                "run.time_step_scale".to_string(),
+                format!("{:e}", r.time_step_scale),
+            )
+        } else if let Some(w) = by.filter(|_| r.time_step.is_none()) {
+            // The contact or wall whose springs set the step, by its quoted name in `w`.
+            let named = |n: &str| w.ends_with(&format!("{n:?}"));
+            let key = if w.starts_with("rigid wall") {
+                scene.walls.iter().position(|x| named(&x.name)).map(|i| {
+                    (
+                        format!("rigid_wall[{i}].penalty_scale"),
+                        scene.walls[i].penalty_scale,
+                    )
+                })
+            } else {
+                scene.contacts.iter().position(|x| named(&x.name)).map(|i| {
+                    (
+                        format!("contact[{i}].penalty_scale"),
+                        scene.contacts[i].penalty_scale,
+                    )
+                })
+            };
+            match key {
+                Some((k, v)) => (k, format!("{v:e}")),
+                None => (format!("penalty_scale of {w}"), "(see the scene)".into()),
+            }
+        } else {
+            ("run.end_time".to_string(), format!("{:e}", r.end_time))
+        };
+        return Err(invalid(&key, value, why));
+    }
+    Ok(())
+}
 
 /// The schedule of a scene's run.
 pub fn schedule(scene: &Scene) -> Schedule {

@@ -179,6 +179,43 @@ fn body_names_that_would_escape_the_output_folder_or_break_the_history_header() 
 }
 
 #[test]
+fn runs_that_would_never_end_are_refused_naming_the_key_and_the_limit() {
+    let cases: [(&str, String, &[&str]); 5] = [
+        (
+            "history_1e-300",
+            variant("end_time = 1.0e-5\n", "end_time = 1.0e-5\nhistory_interval = 1e-300\n"),
+            &["run.history_interval", "1e-300", "more than the limit of 1e7"],
+        ),
+        (
+            "fields_1e-300",
+            variant("end_time = 1.0e-5\n", "end_time = 1.0e-5\nfield_interval = 1e-300\n"),
+            &["run.field_interval", "1e-300", "more than the limit of 1e5"],
+        ),
+        (
+            "scale_5e-324",
+            variant("end_time = 1.0e-5\n", "end_time = 1.0e-5\ntime_step_scale = 5e-324\n"),
+            &["run.time_step_scale", "5e-324", "more than the limit of 1e9"],
+        ),
+        (
+            "penalty_1e300",
+            format!(
+                "{}\n[[rigid_wall]]\npoint = [0.0, -1.0e-3]\nnormal = [0.0, 1.0]\nmethod = \"penalty\"\npenalty_scale = 1e300\n",
+                valid()
+            ),
+            &["rigid_wall[0].penalty_scale", "1e300", "more than the limit of 1e9"],
+        ),
+        (
+            "end_1e9_steps",
+            variant("end_time = 1.0e-5\n", "end_time = 1.0e5\n"),
+            &["run.end_time", "1e5", "more than the limit of 1e9"],
+        ),
+    ];
+    for (case, text, needles) in &cases {
+        expect_rejected(case, text, needles);
+    }
+}
+
+#[test]
 fn duplicate_body_name() {
     let text = format!("{}{BODY}", valid());
     expect_rejected("duplicate_body", &text, &["body[1].name", "\"block\""]);
