@@ -6,6 +6,67 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+/// Fixed-length arrays of the scene file, read strictly: serde's own `[T; N]` takes the first N
+/// values of a longer TOML array and drops the rest (a quad with 5 node indices, a node
+/// `[x, y, z]`, `cells = [2, 2, 0]` were accepted).
+mod fixed {
+    use serde::de::{Deserialize, Deserializer, Error};
+
+    fn exact<'de, D: Deserializer<'de>, T, const N: usize>(v: Vec<T>) -> Result<[T; N], D::Error> {
+        let len = v.len();
+        v.try_into().map_err(|_| {
+            D::Error::invalid_length(len, &format!("an array of exactly {N} values").as_str())
+        })
+    }
+
+    /// `[T; N]`.
+    pub fn array<'de, D, T, const N: usize>(d: D) -> Result<[T; N], D::Error>
+    where
+        D: Deserializer<'de>,
+        T: Deserialize<'de>,
+    {
+        exact::<D, T, N>(Vec::deserialize(d)?)
+    }
+
+    /// `Option<[T; N]>` (with `#[serde(default)]`).
+    pub fn option<'de, D, T, const N: usize>(d: D) -> Result<Option<[T; N]>, D::Error>
+    where
+        D: Deserializer<'de>,
+        T: Deserialize<'de>,
+    {
+        Option::<Vec<T>>::deserialize(d)?
+            .map(exact::<D, T, N>)
+            .transpose()
+    }
+
+    /// `Option<Vec<[T; N]>>` (with `#[serde(default)]`).
+    pub fn list<'de, D, T, const N: usize>(d: D) -> Result<Option<Vec<[T; N]>>, D::Error>
+    where
+        D: Deserializer<'de>,
+        T: Deserialize<'de>,
+    {
+        Option::<Vec<Vec<T>>>::deserialize(d)?
+            .map(|rows| rows.into_iter().map(exact::<D, T, N>).collect())
+            .transpose()
+    }
+
+    /// `Option<[[f64; 2]; 2]>` (with `#[serde(default)]`).
+    pub fn matrix<'de, D>(d: D) -> Result<Option<[[f64; 2]; 2]>, D::Error>
+    where
+        D: Deserializer<'de>,
+    {
+        Option::<Vec<Vec<f64>>>::deserialize(d)?
+            .map(|rows| {
+                let rows: Vec<[f64; 2]> = rows
+                    .into_iter()
+                    .map(exact::<D, f64, 2>)
+                    .collect::<Result<_, _>>()?;
+                exact::<D, [f64; 2], 2>(rows)
+            })
+            .transpose()
+    }
+}
+
 use crate::error::{Error, Result};
 
 /// Longest body name (bytes).
@@ -75,7 +136,9 @@ enum RawBodies {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawWall {
+    #[serde(deserialize_with = "fixed::array")]
     point: [f64; 2],
+    #[serde(deserialize_with = "fixed::array")]
     normal: [f64; 2],
     name: Option<String>,
     bodies: Option<Vec<String>>,
@@ -121,8 +184,10 @@ struct RawBody {
     formulation: Option<String>,
     thickness: Option<f64>,
     mesh: RawMesh,
+    #[serde(default, deserialize_with = "fixed::option")]
     initial_velocity: Option<[f64; 2]>,
     angular_velocity: Option<f64>,
+    #[serde(default, deserialize_with = "fixed::matrix")]
     velocity_gradient: Option<[[f64; 2]; 2]>,
     hourglass: Option<RawHourglass>,
 }
@@ -132,21 +197,27 @@ struct RawBody {
 struct RawMesh {
     rectangle: Option<RawRectangle>,
     disk: Option<RawDisk>,
+    #[serde(default, deserialize_with = "fixed::list")]
     nodes: Option<Vec<[f64; 2]>>,
+    #[serde(default, deserialize_with = "fixed::list")]
     quads: Option<Vec<[i64; 4]>>,
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawRectangle {
+    #[serde(deserialize_with = "fixed::array")]
     origin: [f64; 2],
+    #[serde(deserialize_with = "fixed::array")]
     size: [f64; 2],
+    #[serde(deserialize_with = "fixed::array")]
     cells: [i64; 2],
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawDisk {
+    #[serde(deserialize_with = "fixed::array")]
     center: [f64; 2],
     radius: f64,
     cells: i64,
@@ -156,6 +227,7 @@ struct RawDisk {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawRefine {
+    #[serde(deserialize_with = "fixed::array")]
     toward: [f64; 2],
     ratio: f64,
 }
@@ -178,7 +250,9 @@ struct RawBoundary {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawRegion {
+    #[serde(deserialize_with = "fixed::array")]
     min: [f64; 2],
+    #[serde(deserialize_with = "fixed::array")]
     max: [f64; 2],
 }
 
@@ -528,13 +602,16 @@ impl Validator<'_> {
         }
     }
 
-    /// A non-zero finite vector, normalised.
+    /// A non-zero finite vector, normalised: `v` over its length, scaled first by its largest component so that no finite vector
+    /// overflows (`[-1.5e308, -1.5e308]` is the direction (-1, -1) / sqrt 2).
     fn unit(&self, key: &str, v: [f64; 2]) -> Result<[f64; 2]> {
-        let len = v[0].hypot(v[1]);
-        if !(len.is_finite() && len > 0.0) {
+        let m = v[0].abs().max(v[1].abs());
+        if !(m.is_finite() && m > 0.0) {
             return Err(self.invalid(key, format!("{v:?}"), "must be a finite non-zero vector"));
         }
-        Ok([v[0] / len, v[1] / len])
+        let w = [v[0] / m, v[1] / m];
+        let len = w[0].hypot(w[1]);
+        Ok([w[0] / len, w[1] / len])
     }
 
     fn finite(&self, key: &str, x: f64) -> Result<f64> {
@@ -797,14 +874,15 @@ impl Validator<'_> {
             self.finite(&format!("{key}.point"), w.point[i])?;
             self.finite(&format!("{key}.normal"), w.normal[i])?;
         }
-        let len = w.normal[0].hypot(w.normal[1]);
-        if len.is_nan() || len <= 0.0 {
-            return Err(self.invalid(
+        // Normalised without overflow: a normal of [-1.5e308, -1.5e308] is (-1, -1) / sqrt 2,
+        // not the zero vector.
+        let normal = self.unit(&format!("{key}.normal"), w.normal).map_err(|_| {
+            self.invalid(
                 format!("{key}.normal"),
                 format!("{:?}", w.normal),
                 "must be a non-zero vector (pointing to the side the bodies stay on)",
-            ));
-        }
+            )
+        })?;
         let list = match &w.bodies {
             Some(names) => {
                 if names.is_empty() {
@@ -838,7 +916,7 @@ impl Validator<'_> {
         Ok(RigidWall {
             name,
             point: w.point,
-            normal: [w.normal[0] / len, w.normal[1] / len],
+            normal,
             bodies: list,
             method,
             penalty_scale,

@@ -349,6 +349,79 @@ fn non_positive_time_step_scale() {
 }
 
 #[test]
+fn fixed_length_arrays_with_extra_values_are_refused() {
+    // serde's own [T; N] took the first N values and dropped the rest.
+    let explicit = |nodes: &str, quads: &str| {
+        variant(
+            "mesh = { rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }",
+            &format!("mesh = {{ nodes = {nodes}, quads = {quads} }}"),
+        )
+    };
+    let cases: [(&str, String); 6] = [
+        ("cells_3", variant("cells = [4, 2]", "cells = [4, 2, 0]")),
+        (
+            "origin_3",
+            variant("origin = [0.0, 0.0]", "origin = [0.0, 0.0, 1.0]"),
+        ),
+        (
+            "node_xyz",
+            explicit(
+                "[[0.0, 0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]",
+                "[[0, 1, 2, 3]]",
+            ),
+        ),
+        (
+            "quad_5",
+            explicit(
+                "[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]",
+                "[[0, 1, 2, 3, 0]]",
+            ),
+        ),
+        (
+            "velocity_3",
+            format!("{}initial_velocity = [1.0, 0.0, 0.0]\n", valid()),
+        ),
+        (
+            "wall_point_1",
+            format!(
+                "{}\n[[rigid_wall]]\npoint = [0.0]\nnormal = [0.0, 1.0]\n",
+                valid()
+            ),
+        ),
+    ];
+    for (case, text) in &cases {
+        expect_rejected(case, text, &["TOML parse error at line", "exactly"]);
+    }
+    // The explicit mesh with the right lengths runs.
+    let ok = explicit(
+        "[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]",
+        "[[0, 1, 2, 3]]",
+    );
+    let (dir, file) = write_scene("explicit_ok", &ok);
+    let o = run_bin(&["check", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_wall_normal_whose_length_overflows_keeps_its_direction() {
+    // [-1.5e308, -1.5e308] has a length above f64::MAX: it used to become the zero vector and
+    // the wall did nothing. It is the direction (-1, -1) / sqrt 2.
+    let text = format!(
+        "{}\n[[rigid_wall]]\nname = \"w\"\npoint = [1.0, 1.0]\nnormal = [-1.5e308, -1.5e308]\n",
+        valid()
+    );
+    let scene =
+        ricochet::scene::Scene::parse(&text, std::path::Path::new("wall.toml")).expect("parses");
+    let n = scene.walls[0].normal;
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    assert!(
+        (n[0] + h).abs() < 1e-15 && (n[1] + h).abs() < 1e-15,
+        "{n:?}"
+    );
+}
+
+#[test]
 fn unknown_key_names_the_line() {
     // A typo: `densty`. The parser names the line, the column and the unknown key.
     expect_rejected(
