@@ -157,12 +157,32 @@ impl Model {
                 m.quads.push(q.map(|i| i + n0 as u32));
                 m.element_body.push(bi as u32);
             }
-            if let Some(i) = mass.iter().position(|&x| x <= 0.0) {
+            let mut used = vec![false; mesh.nodes.len()];
+            for q in &mesh.quads {
+                for &i in q {
+                    used[i as usize] = true;
+                }
+            }
+            if let Some(i) = used.iter().position(|&u| !u) {
                 return Err(scene::invalid(
                     scene,
                     format!("body[{bi}].mesh"),
                     format!("node {i}"),
                     "node belongs to no element",
+                ));
+            }
+            if let Some(i) = mass.iter().position(|&x| !(x.is_normal() && x > 0.0)) {
+                return Err(scene::invalid(
+                    scene,
+                    format!("material[{}].density", body.material),
+                    format!("{:e}", material.density),
+                    &format!(
+                        "the mass of node {i} of body {:?} is {:e} kg: density x thickness x \
+                         element area underflows (below {:e})",
+                        body.name,
+                        mass[i],
+                        f64::MIN_POSITIVE
+                    ),
                 ));
             }
             let total: f64 = mass.iter().sum();

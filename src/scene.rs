@@ -587,8 +587,18 @@ impl Validator<'_> {
     }
 
     fn positive(&self, key: &str, x: f64) -> Result<f64> {
-        if x.is_finite() && x > 0.0 {
+        if x.is_normal() && x > 0.0 {
             Ok(x)
+        } else if x > 0.0 && x.is_finite() {
+            Err(self.invalid(
+                key,
+                fmt_num(x),
+                &format!(
+                    "is below the smallest normal number {:e} (subnormal): use a positive finite \
+                     number of normal size",
+                    f64::MIN_POSITIVE
+                ),
+            ))
         } else {
             Err(self.invalid(key, fmt_num(x), "must be a positive finite number"))
         }
@@ -1181,6 +1191,21 @@ impl Validator<'_> {
                             format!("{k}.cells"),
                             format!("{:?}", r.cells),
                             &format!("component {i} must be between 1 and 100000"),
+                        ));
+                    }
+                }
+                for i in 0..2 {
+                    let far = r.origin[i] + r.size[i];
+                    let cell = r.size[i] / r.cells[i] as f64;
+                    if !far.is_finite() || !cell.is_normal() || r.origin[i] + cell == r.origin[i] {
+                        return Err(self.invalid(
+                            format!("{k}.size"),
+                            format!("{:?}", r.size),
+                            &format!(
+                                "component {i}: origin + size = {far:e} and cell size {cell:e} must be \
+                                 finite and larger than the spacing of floating-point numbers at \
+                                 the origin"
+                            ),
                         ));
                     }
                 }

@@ -180,7 +180,7 @@ fn body_names_that_would_escape_the_output_folder_or_break_the_history_header() 
 
 #[test]
 fn runs_that_would_never_end_are_refused_naming_the_key_and_the_limit() {
-    let cases: [(&str, String, &[&str]); 5] = [
+    let cases: [(&str, String, &[&str]); 6] = [
         (
             "history_1e-300",
             variant("end_time = 1.0e-5\n", "end_time = 1.0e-5\nhistory_interval = 1e-300\n"),
@@ -192,9 +192,20 @@ fn runs_that_would_never_end_are_refused_naming_the_key_and_the_limit() {
             &["run.field_interval", "1e-300", "more than the limit of 1e5"],
         ),
         (
+            "scale_1e-300",
+            variant(
+                "end_time = 1.0e-5\n",
+                "end_time = 1.0e-5\ntime_step_scale = 1e-300\n",
+            ),
+            &["run.time_step_scale", "1e-300", "more than the limit of 1e9"],
+        ),
+        (
             "scale_5e-324",
-            variant("end_time = 1.0e-5\n", "end_time = 1.0e-5\ntime_step_scale = 5e-324\n"),
-            &["run.time_step_scale", "5e-324", "more than the limit of 1e9"],
+            variant(
+                "end_time = 1.0e-5\n",
+                "end_time = 1.0e-5\ntime_step_scale = 5e-324\n",
+            ),
+            &["run.time_step_scale", "5e-324", "subnormal"],
         ),
         (
             "penalty_1e300",
@@ -418,6 +429,30 @@ fn a_wall_normal_whose_length_overflows_keeps_its_direction() {
     assert!(
         (n[0] + h).abs() < 1e-15 && (n[1] + h).abs() < 1e-15,
         "{n:?}"
+    );
+}
+
+#[test]
+fn messages_name_the_real_cause() {
+    // A subnormal density used to be reported as "node belongs to no element".
+    expect_rejected(
+        "density_subnormal",
+        &variant("density = 7850.0", "density = 1e-310"),
+        &["material[0].density", "1e-310", "subnormal"],
+    );
+    // A normal density whose nodal masses underflow on tiny elements.
+    expect_rejected(
+        "mass_underflow",
+        &variant("density = 7850.0", "density = 1e-300")
+            .replace("size = [0.1, 0.05]", "size = [1.0e-5, 1.0e-5]"),
+        &["material[0].density", "underflows"],
+    );
+    // A rectangle whose far corner overflows used to be "not convex and counter-clockwise".
+    expect_rejected(
+        "rectangle_overflow",
+        &variant("origin = [0.0, 0.0]", "origin = [1.0e308, 0.0]")
+            .replace("size = [0.1, 0.05]", "size = [1.5e308, 0.05]"),
+        &["body[0].mesh.rectangle.size", "origin + size = inf"],
     );
 }
 
