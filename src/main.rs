@@ -237,6 +237,7 @@ fn load(path: &Path, end_time: Option<f64>) -> anyhow::Result<(Scene, Model, Pla
         }
         scene.run.end_time = t;
     }
+    ricochet::run::check_memory(&scene)?;
     let model = ricochet::run::model(&scene)?;
     ricochet::run::check_limits(&scene, &model)?;
     let plan = Plan::new(&scene, &model);
@@ -748,19 +749,16 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             0.5 * model.mass_damping
         );
     }
-    let bytes_cpu = plan.nodes * (8 * 2 * 4 + 8)
-        + plan.elements * (16 + 64 + 4)
-        + plan.elements * if plan.has_dissipation() { 48 } else { 0 }
-        + plan.nodes
-            * if plan.has(ricochet::plan::Stage::MassDamping) {
-                16
-            } else {
-                0
-            }
-        + plan.pressure_nodes * 24;
+    let bytes_cpu = ricochet::run::memory_estimate(scene);
+    let have = ricochet::run::available_memory()
+        .map(|b| format!(" of {:.1} MiB available", b as f64 / 1048576.0))
+        .unwrap_or_default();
     println!(
-        "memory     about {:.1} MiB (CPU reference)",
-        bytes_cpu as f64 / 1048576.0
+        "memory     about {:.1} MiB (CPU reference peak, from {} + {} bytes per element with \
+         fields){have}",
+        bytes_cpu as f64 / 1048576.0,
+        ricochet::run::BYTES_PER_ELEMENT,
+        ricochet::run::FIELD_BYTES_PER_ELEMENT
     );
     println!("plan       {plan}");
     Ok(())

@@ -69,6 +69,9 @@ mod fixed {
 
 use crate::error::{Error, Result};
 
+/// Largest scene file read (bytes).
+pub const SCENE_MAX_BYTES: u64 = 64 << 20;
+
 /// Longest body name (bytes).
 pub const NAME_MAX: usize = 64;
 
@@ -534,9 +537,28 @@ impl Scene {
     /// [`Error::Read`] when the file cannot be read, [`Error::Parse`] for TOML and shape errors
     /// (unknown keys included), [`Error::Invalid`] for values that are out of range.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+        use std::io::Read as _;
+        let read_err = |source| Error::Read {
             file: path.to_path_buf(),
             source,
+        };
+        // Bounded: `/dev/zero` or a runaway file is refused, not read until memory runs out.
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(SCENE_MAX_BYTES + 1).read_to_end(&mut bytes))
+            .map_err(read_err)?;
+        if bytes.len() as u64 > SCENE_MAX_BYTES {
+            return Err(Error::Parse {
+                file: path.to_path_buf(),
+                message: format!(
+                    "larger than {} MiB: not a scene file (meshes this large belong in a mesh file)",
+                    SCENE_MAX_BYTES >> 20
+                ),
+            });
+        }
+        let text = String::from_utf8(bytes).map_err(|e| Error::Parse {
+            file: path.to_path_buf(),
+            message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
         })?;
         Self::parse(&text, path)
     }

@@ -433,6 +433,38 @@ fn a_wall_normal_whose_length_overflows_keeps_its_direction() {
 }
 
 #[test]
+fn scenes_beyond_the_machines_memory_are_refused_before_meshing() {
+    // 10^10 elements (inside the documented cell range) used to abort on allocation; a disk of
+    // cells = 20000 (1.2e9 elements) meshed toward the out-of-memory killer.
+    expect_rejected(
+        "cells_1e5",
+        &variant("cells = [4, 2]", "cells = [100000, 100000]"),
+        &[
+            "body[0].mesh.rectangle.cells",
+            "[100000, 100000]",
+            "10000000000 elements",
+            "GiB this machine has available",
+        ],
+    );
+    expect_rejected(
+        "disk_20000",
+        &variant(
+            "rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] }",
+            "disk = { center = [0.0, 0.0], radius = 0.1, cells = 20000 }",
+        ),
+        &["body[0].mesh.disk.cells", "20000", "1200000000 elements"],
+    );
+    // A scene file that never ends is not read until memory runs out.
+    let o = run_bin(&["check", "/dev/zero"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("/dev/zero: larger than 64 MiB"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
 fn messages_name_the_real_cause() {
     // A subnormal density used to be reported as "node belongs to no element".
     expect_rejected(
