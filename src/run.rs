@@ -308,13 +308,28 @@ pub fn run(
         Some(_) => Some(FieldWriter::new(out_dir)?),
         None => None,
     };
+    // A summary saying "running" before the first step: an unwritable or full output folder is
+    // found now, not after the whole run, and a crash leaves that status behind.
+    write_summary(
+        out_dir,
+        &summary_now(
+            scene,
+            plan,
+            solver,
+            "running",
+            String::new(),
+            0.0,
+            0.0,
+            0,
+            0,
+        ),
+    )?;
     let mut audit = EnergyAudit::default();
     let mut samples = Vec::new();
     let mut events = Vec::new();
     let mut failure: Option<String> = None;
     let mut interrupted: Option<String> = None;
     let mut progress = progress;
-    let start = Instant::now();
     let mut loop_seconds = 0.0;
     'outer: loop {
         let t0 = Instant::now();
@@ -382,20 +397,61 @@ pub fn run(
         }
     }
     history.finish()?;
-    let _ = start;
+    let status = if failure.is_some() {
+        "failed"
+    } else if interrupted.is_some() {
+        "interrupted"
+    } else {
+        "completed"
+    };
+    let summary = summary_now(
+        scene,
+        plan,
+        solver,
+        status,
+        failure.or(interrupted).unwrap_or_default(),
+        loop_seconds,
+        // Over the rows with finite energies (a run with others has failed, saying so).
+        audit.max_error,
+        samples.len(),
+        fields.as_ref().map(|f| f.count()).unwrap_or(0),
+    );
+    write_summary(out_dir, &summary)?;
+    Ok(RunResult {
+        summary,
+        samples,
+        out_dir: out_dir.to_path_buf(),
+    })
+}
+
+fn write_summary(out_dir: &Path, summary: &Summary) -> Result<()> {
+    let json = serde_json::to_string_pretty(summary).unwrap_or_default();
+    write_file(&out_dir.join("summary.json"), &(json + "\n"))
+}
+
+/// The summary of `solver`'s run so far.
+#[allow(clippy::too_many_arguments)]
+fn summary_now(
+    scene: &Scene,
+    plan: &Plan,
+    solver: &dyn Solver,
+    status: &str,
+    message: String,
+    loop_seconds: f64,
+    max_energy_error: f64,
+    history_rows: usize,
+    snapshots: usize,
+) -> Summary {
     let counters = solver.counters();
-    let (dt_min, dt_max) = solver.dt_range();
     let steps = solver.steps();
-    let summary = Summary {
-        status: if failure.is_some() {
-            "failed"
-        } else if interrupted.is_some() {
-            "interrupted"
-        } else {
-            "completed"
-        }
-        .to_string(),
-        message: failure.or(interrupted).unwrap_or_default(),
+    let (dt_min, dt_max) = if steps > 0 {
+        solver.dt_range()
+    } else {
+        (0.0, 0.0)
+    };
+    Summary {
+        status: status.to_string(),
+        message,
         scene: scene.name.clone(),
         backend: solver.backend().to_string(),
         adapter: solver.adapter(),
@@ -411,8 +467,7 @@ pub fn run(
         },
         dt_min,
         dt_max,
-        // Over the rows with finite energies (a run with others has failed, saying so).
-        max_energy_error: audit.max_error,
+        max_energy_error,
         gpu_submissions: counters.submissions,
         gpu_readbacks: counters.readbacks,
         contact_searches: counters.contact_searches,
@@ -421,14 +476,7 @@ pub fn run(
         contact_sweeps_max: counters.contact_sweeps_max,
         contact_unconverged: counters.contact_unconverged,
         stage_seconds: solver.stage_seconds(),
-        history_rows: samples.len(),
-        snapshots: fields.as_ref().map(|f| f.count()).unwrap_or(0),
-    };
-    let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
-    write_file(&out_dir.join("summary.json"), &(json + "\n"))?;
-    Ok(RunResult {
-        summary,
-        samples,
-        out_dir: out_dir.to_path_buf(),
-    })
+        history_rows,
+        snapshots,
+    }
 }

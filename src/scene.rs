@@ -1188,6 +1188,25 @@ impl Validator<'_> {
                 }
                 out.push(q.map(|n| n as u32));
             }
+            // In a mesh of counter-clockwise quads each directed edge belongs to one quad at most:
+            // a second one lies on the same side of it (a duplicate or overlapping quad).
+            let mut edges = std::collections::HashMap::with_capacity(4 * out.len());
+            for (i, q) in out.iter().enumerate() {
+                for k in 0..4 {
+                    let e = (q[k], q[(k + 1) % 4]);
+                    if let Some(j) = edges.insert(e, i) {
+                        return Err(self.invalid(
+                            format!("{key}.quads[{i}]"),
+                            format!("{:?}", quads[i]),
+                            &format!(
+                                "overlaps quads[{j}] = {:?}: both have the edge from node {} to \
+                                 node {} on the same side (a duplicate or overlapping quad)",
+                                quads[j], e.0, e.1
+                            ),
+                        ));
+                    }
+                }
+            }
             return Ok(MeshSpec::Explicit {
                 nodes: nodes.clone(),
                 quads: out,

@@ -6,7 +6,8 @@ use serde::Serialize;
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
     /// "completed", "failed" (the run went unstable; see `message`) or "interrupted" (by SIGINT or
-    /// SIGTERM; `message` says where).
+    /// SIGTERM; `message` says where); "running" while the run goes on (written before the first
+    /// step, so that an unwritable output folder is found at once).
     pub status: String,
     /// Empty when completed; the diagnostic when failed; the signal, step and time when
     /// interrupted.

@@ -465,6 +465,47 @@ fn scenes_beyond_the_machines_memory_are_refused_before_meshing() {
 }
 
 #[test]
+fn duplicate_or_overlapping_quads_of_an_explicit_mesh_are_refused() {
+    let mesh = |quads: &str| {
+        // Nodes 0-5: a 2 x 1 grid of unit squares; node 6 at (0.5, 0) only for the folded quad.
+        let extra = if quads.contains('6') {
+            ", [0.5, 0.0]"
+        } else {
+            ""
+        };
+        variant(
+            "mesh = { rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }",
+            &format!(
+                "mesh = {{ nodes = [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [0.0, 1.0], [1.0, 1.0], \
+                 [2.0, 1.0]{extra}], quads = {quads} }}"
+            ),
+        )
+    };
+    // The same quad twice, and one starting at another node.
+    expect_rejected(
+        "quad_duplicate",
+        &mesh("[[0, 1, 4, 3], [1, 2, 5, 4], [0, 1, 4, 3]]"),
+        &["quads[2]", "overlaps quads[0]", "same side"],
+    );
+    expect_rejected(
+        "quad_rotated",
+        &mesh("[[0, 1, 4, 3], [4, 3, 0, 1]]"),
+        &["quads[1]", "overlaps quads[0]"],
+    );
+    // A quad folded over its neighbour across their shared edge 1-4.
+    expect_rejected(
+        "quad_folded",
+        &mesh("[[0, 1, 4, 3], [6, 1, 4, 3]]"),
+        &["quads[1]", "overlaps quads[0]"],
+    );
+    // Two quads sharing the edge 1-4 in opposite directions are fine.
+    let (dir, file) = write_scene("quads_ok", &mesh("[[0, 1, 4, 3], [1, 2, 5, 4]]"));
+    let o = run_bin(&["check", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn messages_name_the_real_cause() {
     // A subnormal density used to be reported as "node belongs to no element".
     expect_rejected(

@@ -398,6 +398,8 @@ fn sigint_and_sigterm_end_a_run_with_its_summary_and_complete_history() {
             assert!(start.elapsed().as_secs() < 60, "no snapshot after 60 s");
             std::thread::sleep(std::time::Duration::from_millis(20));
         }
+        // The summary exists from the first step on (an unwritable folder fails at once).
+        assert_eq!(summary(&dir)["status"], "running", "SIG{signal}");
         let kill = std::process::Command::new("kill")
             .args([format!("-{signal}"), child.id().to_string()])
             .status()
