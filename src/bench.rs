@@ -134,6 +134,8 @@ pub fn contact_scene(cells: usize, contact: bool) -> Result<Scene> {
 }
 
 fn build(scene: &Scene) -> Result<(Model, Plan)> {
+    // Before meshing: a size beyond the machine's memory is refused, not allocated.
+    crate::run::check_memory(scene)?;
     let model = crate::run::model(scene)?;
     let plan = Plan::new(scene, &model);
     Ok((model, plan))

@@ -279,6 +279,38 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             if !contact_scenes.is_empty() && elements.contains(&0) {
                 anyhow::bail!("--elements must be positive");
             }
+            // Sizes beyond the machine's memory: refused before anything runs, naming the option.
+            let too_big = |key: &str, value: usize, scene: ricochet::Result<Scene>| match scene
+                .and_then(|s| ricochet::run::check_memory(&s))
+            {
+                Err(ricochet::Error::Invalid {
+                    key: inner,
+                    value: v,
+                    reason,
+                    ..
+                }) => Err(ricochet::Error::Invalid {
+                    file: PathBuf::from("ricochet bench"),
+                    key: key.into(),
+                    value: value.to_string(),
+                    reason: format!("the generated scene's `{inner}` = {v}: {reason}"),
+                }),
+                other => other,
+            };
+            if block {
+                for &n in &cells {
+                    too_big("--cells", n, ricochet::bench::contact_scene(n, true))?;
+                }
+            }
+            for &which in &contact_scenes {
+                for &target in &elements {
+                    let scene = which.scene(
+                        which.size_for(target),
+                        true,
+                        ricochet::bench::PileContact::All,
+                    );
+                    too_big("--elements", target, scene)?;
+                }
+            }
             let ctx = match backend {
                 BenchBackend::Cpu => None,
                 BenchBackend::Auto => GpuContext::new(adapter.as_deref()).ok().map(Arc::new),

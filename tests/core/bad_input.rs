@@ -454,6 +454,15 @@ fn scenes_beyond_the_machines_memory_are_refused_before_meshing() {
         ),
         &["body[0].mesh.disk.cells", "20000", "1200000000 elements"],
     );
+    // `bench` sizes likewise, naming the option.
+    let o = run_bin(&["bench", "--backend", "cpu", "--cells", "100000"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("key `--cells` = 100000")
+            && stderr(&o).contains("GiB this machine has available"),
+        "{}",
+        stderr(&o)
+    );
     // A scene file that never ends is not read until memory runs out.
     let o = run_bin(&["check", "/dev/zero"]);
     assert_eq!(o.status.code(), Some(2));
