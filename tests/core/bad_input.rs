@@ -90,6 +90,18 @@ fn expect_rejected(case: &str, text: &str, needles: &[&str]) -> String {
     last
 }
 
+/// `check` (and, with `run`, a CPU run) accepts the scene.
+fn expect_accepted(case: &str, text: &str, run: bool) {
+    let (dir, file) = write_scene(case, text);
+    let o = if run {
+        run_cpu(&file, &dir.join("out"), &[])
+    } else {
+        run_bin(&["check", file.to_str().unwrap()])
+    };
+    assert_eq!(o.status.code(), Some(0), "{case}: {}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn negative_density() {
     expect_rejected(
@@ -165,17 +177,7 @@ fn body_names_that_would_escape_the_output_folder_or_break_the_history_header() 
     }
     // Allowed: letters, digits, `_`, `-`, `.` inside.
     let text = variant("name = \"block\"", "name = \"Part_2-a.v1\"");
-    let (dir, file) = write_scene("name_ok", &text);
-    let out = dir.join("out");
-    let o = run_bin(&[
-        "run",
-        file.to_str().unwrap(),
-        "--backend",
-        "cpu",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    expect_accepted("name_ok", &text, true);
 }
 
 #[test]
@@ -408,10 +410,7 @@ fn fixed_length_arrays_with_extra_values_are_refused() {
         "[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]",
         "[[0, 1, 2, 3]]",
     );
-    let (dir, file) = write_scene("explicit_ok", &ok);
-    let o = run_bin(&["check", file.to_str().unwrap()]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let _ = std::fs::remove_dir_all(&dir);
+    expect_accepted("explicit_ok", &ok, false);
 }
 
 #[test]
@@ -508,10 +507,7 @@ fn duplicate_or_overlapping_quads_of_an_explicit_mesh_are_refused() {
         &["quads[1]", "overlaps quads[0]"],
     );
     // Two quads sharing the edge 1-4 in opposite directions are fine.
-    let (dir, file) = write_scene("quads_ok", &mesh("[[0, 1, 4, 3], [1, 2, 5, 4]]"));
-    let o = run_bin(&["check", file.to_str().unwrap()]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let _ = std::fs::remove_dir_all(&dir);
+    expect_accepted("quads_ok", &mesh("[[0, 1, 4, 3], [1, 2, 5, 4]]"), false);
 }
 
 #[test]

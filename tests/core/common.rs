@@ -198,6 +198,14 @@ pub fn run_bin(args: &[&str]) -> Output {
         .expect("cannot start the ricochet binary")
 }
 
+/// Runs `ricochet run SCENE --backend cpu --out OUT` with `extra` arguments.
+pub fn run_cpu(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    let (scene, out) = (scene.to_string_lossy(), out.to_string_lossy());
+    let mut args = vec!["run", &scene, "--backend", "cpu", "--out", &out];
+    args.extend_from_slice(extra);
+    run_bin(&args)
+}
+
 /// Relative difference |a - b| / scale.
 pub fn rel(a: f64, b: f64, scale: f64) -> f64 {
     (a - b).abs() / scale

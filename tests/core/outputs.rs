@@ -464,14 +464,7 @@ fn expect_failed_run(case: &str, text: &str) -> (String, String) {
     let file = dir.join(format!("{case}.toml"));
     std::fs::write(&file, text).unwrap();
     let out = dir.join("out");
-    let o = run_bin(&[
-        "run",
-        file.to_str().unwrap(),
-        "--backend",
-        "cpu",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_cpu(&file, &out, &[]);
     let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
     assert_eq!(o.status.code(), Some(3), "{case}: {stderr}");
     assert!(!stderr.contains("panicked"), "{case}: {stderr}");

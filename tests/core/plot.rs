@@ -43,10 +43,7 @@ fn gif_frames(path: &Path) -> (u16, u16, usize) {
 }
 
 fn run_scene(scene: &str, out: &Path, extra: &[&str]) {
-    let out_s = out.to_string_lossy().to_string();
-    let mut args = vec!["run", scene, "--backend", "cpu", "--out", &out_s];
-    args.extend_from_slice(extra);
-    let o = run_bin(&args);
+    let o = run_cpu(Path::new(scene), out, extra);
     assert!(
         o.status.success(),
         "ricochet run {scene}: {}\n{}",
