@@ -305,7 +305,7 @@ pub fn run(
         .collect();
     let mut history = HistoryWriter::create(&out_dir.join("history.csv"), &bodies, &contacts)?;
     let mut fields = match scene.run.field_interval {
-        Some(_) => Some(FieldWriter::new(out_dir)?),
+        Some(_) => Some(FieldWriter::new(out_dir, scene.run.field_format)?),
         None => None,
     };
     // A summary saying "running" before the first step: an unwritable or full output folder is

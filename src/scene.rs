@@ -157,6 +157,7 @@ struct RawRun {
     time_step: Option<f64>,
     history_interval: Option<f64>,
     field_interval: Option<f64>,
+    field_format: Option<String>,
     energy_error_limit: Option<f64>,
     bulk_viscosity: Option<RawBulk>,
     mass_damping: Option<f64>,
@@ -476,6 +477,19 @@ pub struct Pressure {
     pub key: String,
 }
 
+/// Encoding of the VTU field files (`run.field_format`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FieldFormat {
+    /// Raw appended binary data, zlib-compressed, real numbers in single precision (`"binary"`,
+    /// the default).
+    #[default]
+    Binary,
+    /// As [`FieldFormat::Binary`] with real numbers in double precision (`"binary64"`).
+    Binary64,
+    /// Human-readable text (`"ascii"`), several times larger and slower to write.
+    Ascii,
+}
+
 /// Run control, validated.
 #[derive(Debug, Clone)]
 pub struct RunSettings {
@@ -489,6 +503,8 @@ pub struct RunSettings {
     pub history_interval: f64,
     /// Time between field snapshots, if any.
     pub field_interval: Option<f64>,
+    /// Encoding of the field files.
+    pub field_format: FieldFormat,
     /// Relative energy-balance error that stops the run.
     pub energy_error_limit: f64,
     /// Linear bulk-viscosity coefficient.
@@ -988,6 +1004,19 @@ impl Validator<'_> {
             .field_interval
             .map(|f| self.positive("run.field_interval", f))
             .transpose()?;
+        let field_format = match r.field_format.as_deref() {
+            None | Some("binary") => FieldFormat::Binary,
+            Some("binary64") => FieldFormat::Binary64,
+            Some("ascii") => FieldFormat::Ascii,
+            Some(other) => {
+                return Err(self.invalid(
+                    "run.field_format",
+                    format!("{other:?}"),
+                    "expected \"binary\" (zlib-compressed, single precision, the default), \"binary64\" \
+                     (the same in double precision) or \"ascii\"",
+                ))
+            }
+        };
         let energy_error_limit = match r.energy_error_limit {
             Some(e) => self.positive("run.energy_error_limit", e)?,
             None => DEFAULT_ENERGY_ERROR_LIMIT,
@@ -1015,6 +1044,7 @@ impl Validator<'_> {
             time_step,
             history_interval,
             field_interval,
+            field_format,
             energy_error_limit,
             bulk_linear,
             bulk_quadratic,

@@ -10,7 +10,7 @@ For OUT_DIR/fields.pvd and every OUT_DIR/fields/*.vtu it prints one JSON object 
    "von_mises_mismatch": x, "max_abs_z": z}
 "reference_bbox" is the bounding box of (deformed points - displacement), i.e. of the reference
 mesh; "von_mises_mismatch" is the largest relative difference between the written von Mises
-stress and the one recomputed from the written stress tensor.
+stress and the one recomputed from the written stress tensor (in double precision).
 
 Exit status: 0 on success, 77 when meshio cannot be imported, 1 on any read error.
 """
@@ -49,12 +49,12 @@ def main(out_dir):
         types = sorted({b.type for b in mesh.cells})
         pd = {k: ncomp(v) for k, v in mesh.point_data.items()}
         cd = {k: ncomp(v[0]) for k, v in mesh.cell_data.items()}
-        pts = np.asarray(mesh.points)
-        ref = pts[:, :2] - np.asarray(mesh.point_data["displacement"])[:, :2]
-        s = np.asarray(mesh.cell_data["stress"][0])
+        pts = np.asarray(mesh.points, dtype=np.float64)
+        ref = pts[:, :2] - np.asarray(mesh.point_data["displacement"], dtype=np.float64)[:, :2]
+        s = np.asarray(mesh.cell_data["stress"][0], dtype=np.float64)
         sxx, syy, sxy, szz = s[:, 0], s[:, 1], s[:, 2], s[:, 3]
         vm = np.sqrt(0.5 * ((sxx - syy) ** 2 + (syy - szz) ** 2 + (szz - sxx) ** 2 + 6 * sxy**2))
-        vm_file = np.asarray(mesh.cell_data["von_mises"][0]).reshape(-1)
+        vm_file = np.asarray(mesh.cell_data["von_mises"][0], dtype=np.float64).reshape(-1)
         scale = max(float(np.max(np.abs(vm))), 1e-300)
         print(
             json.dumps(

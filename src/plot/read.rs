@@ -190,14 +190,161 @@ impl Piece {
     }
 }
 
-/// Reads an ASCII VTU file as `crate::output::fields` writes it.
+/// The raw appended block of a VTU file and how its arrays are framed.
+struct Appended<'a> {
+    data: &'a [u8],
+    /// Header words are UInt64 (else UInt32).
+    wide: bool,
+    /// Arrays are zlib-compressed in blocks.
+    zlib: bool,
+}
+
+impl Appended<'_> {
+    fn word(&self, at: usize) -> Option<u64> {
+        if self.wide {
+            let b = self.data.get(at..at + 8)?;
+            Some(u64::from_le_bytes(b.try_into().ok()?))
+        } else {
+            let b = self.data.get(at..at + 4)?;
+            Some(u32::from_le_bytes(b.try_into().ok()?) as u64)
+        }
+    }
+
+    /// The bytes of the array at `offset`, decompressed.
+    fn array(&self, offset: usize) -> std::result::Result<Vec<u8>, String> {
+        let w = if self.wide { 8 } else { 4 };
+        let short = || "appended data cut short".to_string();
+        if !self.zlib {
+            let n = self.word(offset).ok_or_else(short)? as usize;
+            let start = offset + w;
+            return self
+                .data
+                .get(start..start.checked_add(n).ok_or_else(short)?)
+                .map(<[u8]>::to_vec)
+                .ok_or_else(short);
+        }
+        use std::io::Read as _;
+        let blocks = self.word(offset).ok_or_else(short)? as usize;
+        let block = self.word(offset + w).ok_or_else(short)? as usize;
+        let last = self.word(offset + 2 * w).ok_or_else(short)? as usize;
+        if blocks > self.data.len() / w {
+            return Err(short());
+        }
+        let total = blocks.saturating_mul(block).saturating_sub(if last > 0 {
+            block - last.min(block)
+        } else {
+            0
+        });
+        let mut out = Vec::with_capacity(total.min(self.data.len().saturating_mul(64)));
+        let mut at = offset + (3 + blocks) * w;
+        for k in 0..blocks {
+            let n = self.word(offset + (3 + k) * w).ok_or_else(short)? as usize;
+            let bytes = self
+                .data
+                .get(at..at.checked_add(n).ok_or_else(short)?)
+                .ok_or_else(short)?;
+            let want = if k + 1 == blocks && last > 0 {
+                last
+            } else {
+                block
+            };
+            let before = out.len();
+            flate2::read::ZlibDecoder::new(bytes)
+                .take(want as u64)
+                .read_to_end(&mut out)
+                .map_err(|e| format!("zlib block {k}: {e}"))?;
+            if out.len() - before != want {
+                return Err(format!(
+                    "zlib block {k}: {} bytes, expected {want}",
+                    out.len() - before
+                ));
+            }
+            at += n;
+        }
+        Ok(out)
+    }
+}
+
+/// Decodes little-endian values of VTK type `ty` as f64.
+fn decode(ty: &str, bytes: &[u8]) -> std::result::Result<Vec<f64>, String> {
+    macro_rules! as_f64 {
+        ($t:ty) => {{
+            let n = std::mem::size_of::<$t>();
+            if !bytes.len().is_multiple_of(n) {
+                return Err(format!(
+                    "{} bytes are not a whole number of {ty}",
+                    bytes.len()
+                ));
+            }
+            bytes
+                .chunks_exact(n)
+                .map(|c| <$t>::from_le_bytes(c.try_into().unwrap_or_default()) as f64)
+                .collect()
+        }};
+    }
+    Ok(match ty {
+        "Float64" => as_f64!(f64),
+        "Float32" => as_f64!(f32),
+        "Int64" => as_f64!(i64),
+        "UInt64" => as_f64!(u64),
+        "Int32" => as_f64!(i32),
+        "UInt32" => as_f64!(u32),
+        "Int8" => as_f64!(i8),
+        "UInt8" => as_f64!(u8),
+        other => return Err(format!("type `{other}` is not read")),
+    })
+}
+
+/// Reads a VTU file as `crate::output::fields` writes it: ASCII arrays, or raw appended data,
+/// zlib-compressed or not, with UInt32 or UInt64 headers.
 ///
 /// # Errors
 /// [`Error::Read`] when the file cannot be read, [`Error::Parse`] when it is not such a file
 /// (another encoding, arrays of the wrong length, a cell that names a missing point).
 pub fn vtu(path: &Path) -> Result<Piece> {
-    let text = read_text(path)?;
+    let bytes = std::fs::read(path).map_err(|source| Error::Read {
+        file: path.to_path_buf(),
+        source,
+    })?;
     let bad = |m: String| parse_error(path, m);
+    let xml_end = bytes
+        .windows(13)
+        .position(|w| w == b"<AppendedData")
+        .unwrap_or(bytes.len());
+    let text = std::str::from_utf8(&bytes[..xml_end])
+        .map_err(|_| bad("the XML part is not UTF-8".into()))?;
+    let appended = if xml_end < bytes.len() {
+        let tag_end = xml_end
+            + bytes[xml_end..]
+                .iter()
+                .position(|&b| b == b'>')
+                .ok_or_else(|| bad("unterminated AppendedData tag".into()))?;
+        let tag = std::str::from_utf8(&bytes[xml_end..tag_end]).unwrap_or("");
+        if attribute(tag, "encoding") != Some("raw") {
+            return Err(bad("AppendedData: only encoding=\"raw\" is read".into()));
+        }
+        let underscore = tag_end
+            + bytes[tag_end..]
+                .iter()
+                .position(|&b| b == b'_')
+                .ok_or_else(|| bad("AppendedData without its `_` mark".into()))?;
+        let file_tag = text
+            .find("<VTKFile")
+            .and_then(|s| text[s..].find('>').map(|e| &text[s..s + e]))
+            .unwrap_or("");
+        let zlib = match attribute(file_tag, "compressor") {
+            None => false,
+            Some("vtkZLibDataCompressor") => true,
+            Some(other) => return Err(bad(format!("compressor `{other}` is not read"))),
+        };
+        Some(Appended {
+            data: &bytes[underscore + 1..],
+            wide: attribute(file_tag, "header_type") == Some("UInt64"),
+            zlib,
+        })
+    } else {
+        None
+    };
     let mut piece = Piece::default();
     let mut at = 0;
     while let Some(found) = text[at..].find("<DataArray") {
@@ -207,17 +354,8 @@ pub fn vtu(path: &Path) -> Result<Piece> {
                 .find('>')
                 .ok_or_else(|| bad("unterminated DataArray tag".into()))?;
         let tag = &text[start..head_end];
-        let body_end = head_end
-            + text[head_end..]
-                .find("</DataArray>")
-                .ok_or_else(|| bad("DataArray without its end tag".into()))?;
         let name = attribute(tag, "Name").unwrap_or("").to_string();
         let format = attribute(tag, "format").unwrap_or("ascii");
-        if format != "ascii" {
-            return Err(bad(format!(
-                "DataArray `{name}`: format `{format}` is not read (ascii only)"
-            )));
-        }
         let components: usize = attribute(tag, "NumberOfComponents")
             .map(|c| {
                 c.parse()
@@ -226,11 +364,39 @@ pub fn vtu(path: &Path) -> Result<Piece> {
             .transpose()?
             .unwrap_or(1)
             .max(1);
-        let values: Vec<f64> = text[head_end + 1..body_end]
-            .split_ascii_whitespace()
-            .map(|v| v.parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| bad(format!("DataArray `{name}`: a value is not a number")))?;
+        let (values, next): (Vec<f64>, usize) = match format {
+            "ascii" => {
+                let body_end = head_end
+                    + text[head_end..]
+                        .find("</DataArray>")
+                        .ok_or_else(|| bad("DataArray without its end tag".into()))?;
+                let values = text[head_end + 1..body_end]
+                    .split_ascii_whitespace()
+                    .map(|v| v.parse::<f64>())
+                    .collect::<std::result::Result<_, _>>()
+                    .map_err(|_| bad(format!("DataArray `{name}`: a value is not a number")))?;
+                (values, body_end)
+            }
+            "appended" => {
+                let data = appended.as_ref().ok_or_else(|| {
+                    bad(format!("DataArray `{name}`: appended, but no AppendedData"))
+                })?;
+                let offset: usize = attribute(tag, "offset")
+                    .and_then(|o| o.parse().ok())
+                    .ok_or_else(|| bad(format!("DataArray `{name}`: no offset")))?;
+                let ty = attribute(tag, "type").unwrap_or("");
+                let values = data
+                    .array(offset)
+                    .and_then(|b| decode(ty, &b))
+                    .map_err(|m| bad(format!("DataArray `{name}`: {m}")))?;
+                (values, head_end)
+            }
+            other => {
+                return Err(bad(format!(
+                    "DataArray `{name}`: format `{other}` is not read (ascii or appended)"
+                )))
+            }
+        };
         if !values.len().is_multiple_of(components) {
             return Err(bad(format!(
                 "DataArray `{name}`: {} values for {components} components",
@@ -267,7 +433,7 @@ pub fn vtu(path: &Path) -> Result<Piece> {
             }),
             _ => {}
         }
-        at = body_end;
+        at = next.max(head_end);
     }
     let np = piece.points.len();
     let mut prev = 0u32;
