@@ -41,6 +41,9 @@ pub enum Error {
         /// The cause.
         source: std::io::Error,
     },
+    /// A checkpoint could not be written, read, or continued (`run --restart`).
+    #[error("checkpoint: {0}")]
+    Checkpoint(String),
     /// A benchmark run did not take the steps it was asked to (the scene stopped early).
     #[error("bench: {0}")]
     Bench(String),

@@ -13,6 +13,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod bench;
+pub mod checkpoint;
 pub mod contact;
 pub mod error;
 pub mod gpu;

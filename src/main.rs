@@ -68,8 +68,9 @@ enum BenchScene {
 enum Command {
     /// Run a scene.
     Run {
-        /// Scene file (TOML).
-        scene: PathBuf,
+        /// Scene file (TOML); not with --restart, which takes the scene of the checkpoint.
+        #[arg(required_unless_present = "restart")]
+        scene: Option<PathBuf>,
         /// Backend.
         #[arg(long, value_enum, default_value = "auto")]
         backend: Backend,
@@ -85,6 +86,14 @@ enum Command {
         /// Then draw the pictures of the run (as `ricochet plot OUT`).
         #[arg(long)]
         plots: bool,
+        /// Write OUT/checkpoint.bin every T seconds of simulated time (and when interrupted),
+        /// replacing the previous one; overrides run.checkpoint_interval.
+        #[arg(long, value_name = "T")]
+        checkpoint_interval: Option<f64>,
+        /// Continue the run whose output folder DIR holds a checkpoint.bin, into DIR, on the
+        /// checkpoint's backend (and the same scene, end time and checkpoint interval).
+        #[arg(long, value_name = "DIR", conflicts_with_all = ["scene", "out", "end_time", "checkpoint_interval"])]
+        restart: Option<PathBuf>,
     },
     /// Draw a run's pictures from its output folder into OUT/plots/: energies, contact forces and
     /// body velocities against time, and the deformed mesh filled by a field at chosen snapshots.
@@ -215,6 +224,7 @@ fn main() -> ExitCode {
                         ricochet::Error::Read { .. }
                             | ricochet::Error::Parse { .. }
                             | ricochet::Error::Invalid { .. }
+                            | ricochet::Error::Checkpoint(_)
                     )
                 })
                 .unwrap_or(false);
@@ -237,11 +247,17 @@ fn load(path: &Path, end_time: Option<f64>) -> anyhow::Result<(Scene, Model, Pla
         }
         scene.run.end_time = t;
     }
-    ricochet::run::check_memory(&scene)?;
-    let model = ricochet::run::model(&scene)?;
-    ricochet::run::check_limits(&scene, &model)?;
-    let plan = Plan::new(&scene, &model);
+    let (model, plan) = prepare(&scene)?;
     Ok((scene, model, plan))
+}
+
+/// The checks of a loaded scene, its model and its plan.
+fn prepare(scene: &Scene) -> anyhow::Result<(Model, Plan)> {
+    ricochet::run::check_memory(scene)?;
+    let model = ricochet::run::model(scene)?;
+    ricochet::run::check_limits(scene, &model)?;
+    let plan = Plan::new(scene, &model);
+    Ok((model, plan))
 }
 
 fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
@@ -456,13 +472,82 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             end_time,
             adapter,
             plots,
+            checkpoint_interval,
+            restart,
         } => {
-            let (scene, model, plan) = load(&scene, end_time)?;
-            let out = out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+            let resume = match &restart {
+                Some(dir) => Some(ricochet::checkpoint::Checkpoint::read(dir)?),
+                None => None,
+            };
+            let (scene, model, plan, out, checkpointing) = match (&resume, scene) {
+                (Some(c), _) => {
+                    let scene = c.scene()?;
+                    let (model, plan) = prepare(&scene)?;
+                    let out = restart.clone().unwrap_or_default();
+                    let checkpointing = ricochet::checkpoint::Checkpointing {
+                        interval: c.interval,
+                        scene_path: c.scene_path.clone(),
+                        scene_text: c.scene_text.clone(),
+                        end_time_override: c.end_time_override,
+                    };
+                    println!(
+                        "restarting {} from its checkpoint at step {}, t = {:e} s ({} backend)",
+                        scene.file.display(),
+                        c.steps,
+                        c.time,
+                        c.backend
+                    );
+                    (scene, model, plan, out, Some(checkpointing))
+                }
+                (None, Some(path)) => {
+                    let (scene, model, plan) = load(&path, end_time)?;
+                    let out = out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+                    let interval = checkpoint_interval.or(scene.run.checkpoint_interval);
+                    let checkpointing = match interval {
+                        Some(t) if !(t.is_finite() && t > 0.0) => {
+                            return Err(ricochet::Error::Invalid {
+                                file: path.clone(),
+                                key: "--checkpoint-interval".into(),
+                                value: format!("{t:?}"),
+                                reason: "must be a positive finite number of seconds".into(),
+                            }
+                            .into())
+                        }
+                        Some(t) => Some(ricochet::checkpoint::Checkpointing {
+                            interval: t,
+                            scene_path: path.clone(),
+                            // Loaded just above, so readable and at most SCENE_MAX_BYTES.
+                            scene_text: std::fs::read_to_string(&path).map_err(|source| {
+                                ricochet::Error::Read {
+                                    file: path.clone(),
+                                    source,
+                                }
+                            })?,
+                            end_time_override: end_time,
+                        }),
+                        None => None,
+                    };
+                    (scene, model, plan, out, checkpointing)
+                }
+                (None, None) => anyhow::bail!("a scene file or --restart DIR is required"),
+            };
+            // A restart continues on the checkpoint's backend.
+            let backend = match resume.as_ref().map(|c| c.backend.as_str()) {
+                Some("cpu") => Backend::Cpu,
+                Some(_) => Backend::Gpu,
+                None => backend,
+            };
             let schedule = ricochet::run::schedule(&scene);
             let cpu = || -> Box<dyn Solver> {
                 Box::new(CpuSolver::new(model.clone(), plan.clone(), schedule))
             };
+            // A GPU restart asks for the checkpoint's adapter unless --adapter names another.
+            let adapter = adapter.or_else(|| {
+                resume
+                    .as_ref()
+                    .filter(|c| c.backend == "gpu")
+                    .map(|c| c.adapter.clone())
+            });
             let mut solver: Box<dyn Solver> = match backend {
                 Backend::Cpu => cpu(),
                 Backend::Auto => match GpuContext::new(adapter.as_deref()) {
@@ -496,13 +581,17 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     .caught()
                     .map(|(name, _)| format!("interrupted by {name}"))
             };
-            let result = ricochet::run::run(
+            let result = ricochet::run::run_with(
                 &scene,
                 &model,
                 &plan,
                 solver.as_mut(),
                 &out,
                 Some(&mut tick),
+                ricochet::run::RunOptions {
+                    checkpointing,
+                    resume,
+                },
             )
             .with_context(|| format!("running {}", scene.file.display()))?;
             if let Some(b) = bar {

@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::checkpoint::{Checkpoint, Checkpointing};
 use crate::error::{Error, Result};
 use crate::model::Model;
 use crate::output::fields::FieldWriter;
@@ -281,8 +282,17 @@ pub struct RunResult {
     pub out_dir: PathBuf,
 }
 
+/// Checkpoints and restarts of a run ([`run_with`]).
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Write a checkpoint every so much simulated time (and when the run is interrupted).
+    pub checkpointing: Option<Checkpointing>,
+    /// Continue from this checkpoint (of a run of the same scene into the same `out_dir`).
+    pub resume: Option<Checkpoint>,
+}
+
 /// Runs `solver` to the end of `scene`, writing `history.csv`, `summary.json` and, when the scene
-/// asks for them, the fields into `out_dir`.
+/// asks for them, the fields into `out_dir` ([`run_with`] without checkpoints).
 ///
 /// # Errors
 /// I/O errors on the outputs and backend failures. An unstable run is not an error: it ends with
@@ -295,6 +305,36 @@ pub fn run(
     out_dir: &Path,
     progress: Option<Progress<'_>>,
 ) -> Result<RunResult> {
+    run_with(
+        scene,
+        model,
+        plan,
+        solver,
+        out_dir,
+        progress,
+        RunOptions::default(),
+    )
+}
+
+/// [`run`] with checkpoints ([`crate::checkpoint`]): with `options.checkpointing`, a checkpoint
+/// is written into `out_dir` at the first batch of steps ending at or after each multiple of the
+/// interval, and when the run is interrupted; with `options.resume`, the solver's state, the
+/// energy audit and the outputs continue from that checkpoint (`history.csv` cut back to its
+/// rows, `fields.pvd` to its snapshots), so that the outputs end as those of the run that was
+/// never stopped. `RunResult::samples` then holds the samples after the checkpoint only.
+///
+/// # Errors
+/// As [`run`]; [`Error::Checkpoint`] when the checkpoint does not fit the solver or outputs.
+#[allow(clippy::too_many_arguments)]
+pub fn run_with(
+    scene: &Scene,
+    model: &Model,
+    plan: &Plan,
+    solver: &mut dyn Solver,
+    out_dir: &Path,
+    progress: Option<Progress<'_>>,
+    options: RunOptions,
+) -> Result<RunResult> {
     create_dir(out_dir)?;
     let bodies: Vec<String> = model.bodies.iter().map(|b| b.name.clone()).collect();
     let contacts: Vec<String> = model
@@ -303,11 +343,48 @@ pub fn run(
         .map(|c| c.name.clone())
         .chain(model.walls.iter().map(|w| w.name.clone()))
         .collect();
-    let mut history = HistoryWriter::create(&out_dir.join("history.csv"), &bodies, &contacts)?;
-    let mut fields = match scene.run.field_interval {
-        Some(_) => Some(FieldWriter::new(out_dir, scene.run.field_format)?),
-        None => None,
+    let history_path = out_dir.join("history.csv");
+    let format = scene.run.field_format;
+    let mut audit = EnergyAudit::default();
+    let mut loop_seconds = 0.0;
+    let mut rows_before = 0usize;
+    let (mut history, mut fields) = match &options.resume {
+        None => (
+            HistoryWriter::create(&history_path, &bodies, &contacts)?,
+            match scene.run.field_interval {
+                Some(_) => Some(FieldWriter::new(out_dir, format)?),
+                None => None,
+            },
+        ),
+        Some(c) => {
+            if c.backend != solver.backend() {
+                return Err(Error::Checkpoint(format!(
+                    "the checkpoint is of the {} backend; this run is on {}",
+                    c.backend,
+                    solver.backend()
+                )));
+            }
+            solver.restore_state(&c.solver)?;
+            audit = c.audit.clone();
+            loop_seconds = c.loop_seconds;
+            rows_before = c.history_rows as usize;
+            (
+                HistoryWriter::resume(&history_path, c.history_bytes, c.history_rows)?,
+                match scene.run.field_interval {
+                    Some(_) => Some(FieldWriter::resume(
+                        out_dir,
+                        format,
+                        model,
+                        c.snapshots.clone(),
+                    )?),
+                    None => None,
+                },
+            )
+        }
     };
+    let interval = options.checkpointing.as_ref().map(|c| c.interval);
+    let next_after = |t: f64| interval.map(|i| ((t / i).floor() + 1.0) * i);
+    let mut next_checkpoint = next_after(solver.time());
     // A summary saying "running" before the first step: an unwritable or full output folder is
     // found now, not after the whole run, and a crash leaves that status behind.
     write_summary(
@@ -324,13 +401,42 @@ pub fn run(
             0,
         ),
     )?;
-    let mut audit = EnergyAudit::default();
     let mut samples = Vec::new();
     let mut events = Vec::new();
     let mut failure: Option<String> = None;
     let mut interrupted: Option<String> = None;
     let mut progress = progress;
-    let mut loop_seconds = 0.0;
+    let checkpoint = |solver: &mut dyn Solver,
+                      history: &mut HistoryWriter,
+                      fields: &Option<FieldWriter>,
+                      audit: &EnergyAudit,
+                      loop_seconds: f64|
+     -> Result<()> {
+        let Some(c) = &options.checkpointing else {
+            return Ok(());
+        };
+        let (history_bytes, history_rows) = history.flush()?;
+        Checkpoint {
+            scene_path: c.scene_path.clone(),
+            scene_text: c.scene_text.clone(),
+            end_time_override: c.end_time_override,
+            interval: c.interval,
+            backend: solver.backend().to_string(),
+            adapter: solver.adapter(),
+            steps: solver.steps(),
+            time: solver.time(),
+            history_bytes,
+            history_rows,
+            snapshots: fields
+                .as_ref()
+                .map(|f| f.entries().to_vec())
+                .unwrap_or_default(),
+            audit: audit.clone(),
+            loop_seconds,
+            solver: solver.save_state()?,
+        }
+        .write(out_dir)
+    };
     'outer: loop {
         let t0 = Instant::now();
         solver.advance(&mut events)?;
@@ -384,8 +490,13 @@ pub fn run(
                 }
             }
         }
+        if next_checkpoint.is_some_and(|t| solver.time() >= t) {
+            checkpoint(solver, &mut history, &fields, &audit, loop_seconds)?;
+            next_checkpoint = next_after(solver.time());
+        }
         if let Some(p) = progress.as_mut() {
             if let Some(cause) = p(solver.time(), scene.run.end_time, solver.steps()) {
+                checkpoint(solver, &mut history, &fields, &audit, loop_seconds)?;
                 interrupted = Some(format!(
                     "{cause} at step {}, t = {:e} s (of {:e} s)",
                     solver.steps(),
@@ -413,7 +524,7 @@ pub fn run(
         loop_seconds,
         // Over the rows with finite energies (a run with others has failed, saying so).
         audit.max_error,
-        samples.len(),
+        rows_before + samples.len(),
         fields.as_ref().map(|f| f.count()).unwrap_or(0),
     );
     write_summary(out_dir, &summary)?;

@@ -158,6 +158,7 @@ struct RawRun {
     history_interval: Option<f64>,
     field_interval: Option<f64>,
     field_format: Option<String>,
+    checkpoint_interval: Option<f64>,
     energy_error_limit: Option<f64>,
     bulk_viscosity: Option<RawBulk>,
     mass_damping: Option<f64>,
@@ -406,7 +407,7 @@ pub struct Boundary {
 }
 
 /// How a contact constraint is enforced.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum ContactMethod {
     /// Lagrange multipliers with the diagonal mass: the gap is closed exactly in the step
     /// (perfectly plastic impact of the contacting nodes, momentum conserved).
@@ -505,6 +506,8 @@ pub struct RunSettings {
     pub field_interval: Option<f64>,
     /// Encoding of the field files.
     pub field_format: FieldFormat,
+    /// Simulated time between checkpoints (`checkpoint.bin` in the output folder), if any.
+    pub checkpoint_interval: Option<f64>,
     /// Relative energy-balance error that stops the run.
     pub energy_error_limit: f64,
     /// Linear bulk-viscosity coefficient.
@@ -1017,6 +1020,10 @@ impl Validator<'_> {
                 ))
             }
         };
+        let checkpoint_interval = r
+            .checkpoint_interval
+            .map(|c| self.positive("run.checkpoint_interval", c))
+            .transpose()?;
         let energy_error_limit = match r.energy_error_limit {
             Some(e) => self.positive("run.energy_error_limit", e)?,
             None => DEFAULT_ENERGY_ERROR_LIMIT,
@@ -1045,6 +1052,7 @@ impl Validator<'_> {
             history_interval,
             field_interval,
             field_format,
+            checkpoint_interval,
             energy_error_limit,
             bulk_linear,
             bulk_quadratic,

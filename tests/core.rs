@@ -24,6 +24,8 @@
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs;
 //! - [`plot`]: `ricochet plot` and `run --plots`: every picture at its size, identical bytes twice,
 //!   GIF frames, the colour of the patch test's uniform stress, refused folders and fields;
+//! - [`restart`]: checkpoints and `run --restart` give the outputs of the run never stopped, bit
+//!   for bit, after a crash and after an interruption, with contact; bad checkpoints exit 2;
 //! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound.
 
 #[path = "core/common.rs"]
@@ -51,6 +53,8 @@ mod patch_contact;
 mod plan;
 #[path = "core/plot.rs"]
 mod plot;
+#[path = "core/restart.rs"]
+mod restart;
 #[path = "core/rigid.rs"]
 mod rigid;
 #[path = "core/stress.rs"]

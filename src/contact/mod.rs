@@ -48,7 +48,7 @@ pub use tables::{SegmentTable, SlotTable, Tables};
 use report::Interface;
 
 /// One pass: slave nodes against master segments, of two bodies or of a group.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct Pass {
     interface: usize,
     method: ContactMethod,
@@ -98,7 +98,7 @@ impl Pass {
 }
 
 /// A rigid wall.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct Wall {
     interface: usize,
     method: ContactMethod,
@@ -113,7 +113,7 @@ struct Wall {
 }
 
 /// An active constraint of the step.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 struct Constraint {
     interface: u32,
     s: u32,
@@ -144,7 +144,7 @@ pub struct StepWork {
 }
 
 /// Contact state of a model on the CPU.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ContactSet {
     interfaces: Vec<Interface>,
     passes: Vec<Pass>,

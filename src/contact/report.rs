@@ -23,7 +23,7 @@ pub struct ContactSample {
 }
 
 /// A contact or wall as the history sees it.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(super) struct Interface {
     pub(super) name: String,
     /// Impulse on the first body since the last sample.

@@ -14,7 +14,7 @@ pub const SWEEP_TOLERANCE: f64 = 1e-13;
 pub const ACTIVE_SET_ROUNDS: usize = 4;
 
 /// Projected Gauss-Seidel sweeps of the Lagrange correction over a run.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SweepStats {
     /// Sweeps of the current step.
     pub step: u64,

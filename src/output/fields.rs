@@ -95,6 +95,29 @@ impl FieldWriter {
         })
     }
 
+    /// Continues the output of a checkpointed run under `out_dir`, whose snapshots so far were
+    /// `entries` (see [`FieldWriter::entries`]).
+    ///
+    /// # Errors
+    /// [`crate::Error::Write`] when the folder cannot be created.
+    pub fn resume(
+        out_dir: &Path,
+        format: FieldFormat,
+        model: &Model,
+        entries: Vec<(f64, String, String)>,
+    ) -> Result<Self> {
+        let mut w = Self::new(out_dir, format)?;
+        w.entries = entries;
+        // `fields.pvd` lists no snapshot taken after the checkpoint.
+        w.write_pvd(model)?;
+        Ok(w)
+    }
+
+    /// The snapshots written: (time, body, file relative to the output folder).
+    pub fn entries(&self) -> &[(f64, String, String)] {
+        &self.entries
+    }
+
     /// Number of snapshots written.
     pub fn count(&self) -> usize {
         let mut times: Vec<u64> = self.entries.iter().map(|e| e.0.to_bits()).collect();
@@ -115,6 +138,10 @@ impl FieldWriter {
             self.entries
                 .push((snap.time, body.name.clone(), format!("fields/{name}")));
         }
+        self.write_pvd(model)
+    }
+
+    fn write_pvd(&self, model: &Model) -> Result<()> {
         let mut pvd = String::from(
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
         );

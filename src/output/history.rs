@@ -22,7 +22,7 @@ pub const COLUMNS: [&str; 10] = [
 ];
 
 /// The energy audit: turns samples into balance errors relative to the largest energy seen.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct EnergyAudit {
     initial: Option<f64>,
     largest: f64,
@@ -61,6 +61,9 @@ impl EnergyAudit {
 pub struct HistoryWriter {
     path: PathBuf,
     out: BufWriter<File>,
+    /// Bytes and rows written so far (header included in the bytes).
+    bytes: u64,
+    rows: u64,
 }
 
 impl HistoryWriter {
@@ -77,6 +80,8 @@ impl HistoryWriter {
         let mut w = Self {
             path: path.to_path_buf(),
             out: BufWriter::new(file),
+            bytes: 0,
+            rows: 0,
         };
         let mut header = COLUMNS.join(",");
         for b in bodies {
@@ -91,7 +96,55 @@ impl HistoryWriter {
         Ok(w)
     }
 
+    /// Continues the file at `path` after its first `bytes` bytes (`rows` rows): what a
+    /// checkpoint recorded. Anything after them (rows written after the checkpoint) is cut off.
+    ///
+    /// # Errors
+    /// [`Error::Checkpoint`] when the file is shorter than `bytes` (it is not the checkpoint's),
+    /// [`Error::Write`] when it cannot be opened.
+    pub fn resume(path: &Path, bytes: u64, rows: u64) -> Result<Self> {
+        use std::io::{Seek, SeekFrom};
+        let write_err = |source| Error::Write {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(path)
+            .map_err(write_err)?;
+        let len = file.metadata().map_err(write_err)?.len();
+        if len < bytes {
+            return Err(Error::Checkpoint(format!(
+                "{}: {len} bytes, but the checkpoint was taken after {bytes}: not the \
+                 checkpoint's history",
+                path.display()
+            )));
+        }
+        file.set_len(bytes).map_err(write_err)?;
+        file.seek(SeekFrom::End(0)).map_err(write_err)?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            out: BufWriter::new(file),
+            bytes,
+            rows,
+        })
+    }
+
+    /// Flushes the rows written so far and returns (bytes, rows) of the file.
+    ///
+    /// # Errors
+    /// [`Error::Write`] on I/O failure.
+    pub fn flush(&mut self) -> Result<(u64, u64)> {
+        self.out.flush().map_err(|source| Error::Write {
+            path: self.path.clone(),
+            source,
+        })?;
+        Ok((self.bytes, self.rows))
+    }
+
     fn line(&mut self, s: &str) -> Result<()> {
+        self.bytes += s.len() as u64 + 1;
         writeln!(self.out, "{s}").map_err(|source| Error::Write {
             path: self.path.clone(),
             source,
@@ -125,6 +178,7 @@ impl HistoryWriter {
                 c.force[0], c.force[1], c.max_penetration, c.active_nodes
             ));
         }
+        self.rows += 1;
         self.line(&line)
     }
 

@@ -57,6 +57,37 @@ pub struct CpuSolver {
     done: bool,
 }
 
+/// Everything of a [`CpuSolver`] that changes while it runs (the model, plan, schedule and what
+/// is derived from them are rebuilt from the scene): a checkpoint's solver part.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CpuState {
+    clock: Clock,
+    u: Vec<[f64; 2]>,
+    v: Vec<[f64; 2]>,
+    v_prev: Vec<[f64; 2]>,
+    f: Vec<[f64; 2]>,
+    dissipation: Vec<Dissipation>,
+    contact: Option<ContactSet>,
+    contact_work: f64,
+    contact_after: f64,
+    hourglass_work: f64,
+    bulk_work: f64,
+    external_work: f64,
+    pressure_impulse: Vec<[f64; 2]>,
+    pressure_v_old: Vec<[f64; 2]>,
+    pressure_work: f64,
+    pressure_after: f64,
+    damping_v_old: Vec<[f64; 2]>,
+    damping_work: f64,
+    damping_after: f64,
+    t: f64,
+    n: u64,
+    dt_prev: f64,
+    dt_first: f64,
+    dt_range: (f64, f64),
+    done: bool,
+}
+
 /// Result of one element stage.
 struct ElementStage {
     dt_min: f64,
@@ -123,6 +154,93 @@ impl CpuSolver {
             dt_range: (f64::INFINITY, 0.0),
             done: false,
         }
+    }
+
+    /// The solver's changing state as bytes (a checkpoint; see [`CpuSolver::restore_state`]).
+    ///
+    /// # Errors
+    /// [`crate::Error::Checkpoint`] if it cannot be encoded.
+    pub fn save_state(&self) -> Result<Vec<u8>> {
+        let state = CpuState {
+            clock: self.clock,
+            u: self.u.clone(),
+            v: self.v.clone(),
+            v_prev: self.v_prev.clone(),
+            f: self.f.clone(),
+            dissipation: self.dissipation.clone(),
+            contact: self.contact.clone(),
+            contact_work: self.contact_work,
+            contact_after: self.contact_after,
+            hourglass_work: self.hourglass_work,
+            bulk_work: self.bulk_work,
+            external_work: self.external_work,
+            pressure_impulse: self.pressure_impulse.clone(),
+            pressure_v_old: self.pressure_v_old.clone(),
+            pressure_work: self.pressure_work,
+            pressure_after: self.pressure_after,
+            damping_v_old: self.damping_v_old.clone(),
+            damping_work: self.damping_work,
+            damping_after: self.damping_after,
+            t: self.t,
+            n: self.n,
+            dt_prev: self.dt_prev,
+            dt_first: self.dt_first,
+            dt_range: self.dt_range,
+            done: self.done,
+        };
+        postcard::to_stdvec(&state)
+            .map_err(|e| crate::Error::Checkpoint(format!("encoding the CPU state: {e}")))
+    }
+
+    /// Continues from a state saved by [`CpuSolver::save_state`] of a solver of the same model.
+    ///
+    /// # Errors
+    /// [`crate::Error::Checkpoint`] if the bytes do not decode or do not fit this model.
+    pub fn restore_state(&mut self, bytes: &[u8]) -> Result<()> {
+        let s: CpuState = postcard::from_bytes(bytes)
+            .map_err(|e| crate::Error::Checkpoint(format!("decoding the CPU state: {e}")))?;
+        let (nn, ne) = (self.model.node_count(), self.model.element_count());
+        let fits = s.u.len() == nn
+            && s.v.len() == nn
+            && s.v_prev.len() == nn
+            && s.f.len() == nn
+            && s.dissipation.len() == self.dissipation.len()
+            && s.pressure_impulse.len() == self.pressure.len()
+            && s.pressure_v_old.len() == self.pressure.len()
+            && s.damping_v_old.len() == self.damping_v_old.len()
+            && s.contact.is_some() == self.contact.is_some()
+            && (self.dissipation.is_empty() || self.dissipation.len() == ne);
+        if !fits {
+            return Err(crate::Error::Checkpoint(
+                "the saved CPU state does not fit this scene's model (another mesh or plan)".into(),
+            ));
+        }
+        self.clock = s.clock;
+        self.u = s.u;
+        self.v = s.v;
+        self.v_prev = s.v_prev;
+        self.f = s.f;
+        self.dissipation = s.dissipation;
+        self.contact = s.contact;
+        self.contact_work = s.contact_work;
+        self.contact_after = s.contact_after;
+        self.hourglass_work = s.hourglass_work;
+        self.bulk_work = s.bulk_work;
+        self.external_work = s.external_work;
+        self.pressure_impulse = s.pressure_impulse;
+        self.pressure_v_old = s.pressure_v_old;
+        self.pressure_work = s.pressure_work;
+        self.pressure_after = s.pressure_after;
+        self.damping_v_old = s.damping_v_old;
+        self.damping_work = s.damping_work;
+        self.damping_after = s.damping_after;
+        self.t = s.t;
+        self.n = s.n;
+        self.dt_prev = s.dt_prev;
+        self.dt_first = s.dt_first;
+        self.dt_range = s.dt_range;
+        self.done = s.done;
+        Ok(())
     }
 
     /// The model.
@@ -537,6 +655,14 @@ impl CpuSolver {
 }
 
 impl Solver for CpuSolver {
+    fn save_state(&mut self) -> Result<Vec<u8>> {
+        CpuSolver::save_state(self)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> Result<()> {
+        CpuSolver::restore_state(self, state)
+    }
+
     fn counters(&self) -> crate::step::Counters {
         let s = self
             .contact

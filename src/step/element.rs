@@ -128,7 +128,7 @@ pub struct ElementOut {
 }
 
 /// Dissipative state of an element from the previous step, for the trapezoidal work pairing.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Dissipation {
     /// Viscous hourglass generalized force of the previous step.
     pub hourglass_q: [f64; 2],

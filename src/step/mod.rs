@@ -34,7 +34,7 @@ pub struct Schedule {
 pub const TIME_SLACK: f64 = 0.01;
 
 /// Tracks the next due sample and snapshot.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Clock {
     /// Index k of the next sample time k * history_interval.
     pub next_sample: u64,
@@ -211,6 +211,27 @@ pub trait Solver {
     /// Submission and readback counters.
     fn counters(&self) -> Counters {
         Counters::default()
+    }
+    /// The solver's changing state, for a checkpoint ([`crate::checkpoint`]); taken between
+    /// [`Solver::advance`] calls.
+    ///
+    /// # Errors
+    /// [`crate::Error::Checkpoint`] when the backend cannot save it; device readback failures.
+    fn save_state(&mut self) -> Result<Vec<u8>> {
+        Err(crate::Error::Checkpoint(format!(
+            "the {} backend cannot save its state",
+            self.backend()
+        )))
+    }
+    /// Continues from a state saved by [`Solver::save_state`] of the same backend and model.
+    ///
+    /// # Errors
+    /// [`crate::Error::Checkpoint`] when the state does not fit this solver.
+    fn restore_state(&mut self, _state: &[u8]) -> Result<()> {
+        Err(crate::Error::Checkpoint(format!(
+            "the {} backend cannot restore a state",
+            self.backend()
+        )))
     }
     /// Optional per-stage timings (stage name, seconds).
     fn stage_seconds(&self) -> Vec<(String, f64)> {
