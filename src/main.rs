@@ -541,13 +541,6 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             let cpu = || -> Box<dyn Solver> {
                 Box::new(CpuSolver::new(model.clone(), plan.clone(), schedule))
             };
-            // A GPU restart asks for the checkpoint's adapter unless --adapter names another.
-            let adapter = adapter.or_else(|| {
-                resume
-                    .as_ref()
-                    .filter(|c| c.backend == "gpu")
-                    .map(|c| c.adapter.clone())
-            });
             let mut solver: Box<dyn Solver> = match backend {
                 Backend::Cpu => cpu(),
                 Backend::Auto => match GpuContext::new(adapter.as_deref()) {
@@ -570,6 +563,15 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?)
                 }
             };
+            if let Some(c) = resume.as_ref().filter(|c| c.adapter != solver.adapter()) {
+                eprintln!(
+                    "notice: the checkpoint was written on {}, this run is on {}: the run \
+                     continues, but its results may differ in the last bits from the run that was \
+                     never stopped",
+                    c.adapter,
+                    solver.adapter()
+                );
+            }
             let signals = Signals::register()?;
             let bar = progress_bar();
             let mut tick = |t: f64, end: f64, steps: u64| {

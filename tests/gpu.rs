@@ -546,6 +546,8 @@ mod general;
 mod patch;
 #[path = "gpu/plan.rs"]
 mod plan;
+#[path = "gpu/restart.rs"]
+mod restart;
 #[path = "gpu/stress.rs"]
 mod stress;
 #[path = "gpu/verify.rs"]

@@ -9,6 +9,7 @@
 //! All sums are gathers or fixed-order trees: the same scene on the same adapter gives the same bits.
 
 pub mod boundary;
+mod checkpoint;
 pub mod contact;
 pub mod context;
 pub mod control;

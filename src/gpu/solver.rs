@@ -245,6 +245,50 @@ impl GpuSolver {
         &self.state
     }
 
+    pub(crate) fn state_mut(&mut self) -> &mut GpuState {
+        &mut self.state
+    }
+
+    /// The host's copy of the control block, rows read, step estimate, counters and whether the
+    /// run ended (for checkpoints).
+    pub(crate) fn host_state(&self) -> (Control, u32, f64, Counters, bool) {
+        (
+            self.ctrl,
+            self.rows_read,
+            self.dt_estimate,
+            self.counters,
+            self.finished,
+        )
+    }
+
+    /// Sets what [`GpuSolver::host_state`] returns (restoring a checkpoint).
+    pub(crate) fn set_host_state(
+        &mut self,
+        ctrl: Control,
+        rows_read: u32,
+        dt_estimate: f64,
+        counters: Counters,
+        finished: bool,
+    ) {
+        self.ctrl = ctrl;
+        self.rows_read = rows_read;
+        self.dt_estimate = dt_estimate;
+        self.counters = counters;
+        self.finished = finished;
+    }
+
+    /// Gives the contact candidate buffer room for `cap` candidates, if it has not (restoring a
+    /// checkpoint of a run whose buffer grew).
+    pub(crate) fn resize_contact_candidates(&mut self, cap: u32) -> Result<()> {
+        let device = &self.ctx.device;
+        if let (Some(c), Some(k)) = (self.state.contact.as_mut(), self.kernels.contact.as_ref()) {
+            if c.params.cand_capacity != cap {
+                c.resize_candidates(device, k, cap);
+            }
+        }
+        Ok(())
+    }
+
     /// The compiled kernels.
     pub fn kernels(&self) -> &Kernels {
         &self.kernels
@@ -674,7 +718,11 @@ impl GpuSolver {
     /// Copies each `(buffer, offset, bytes)` in turn into one fresh staging buffer, reads it back
     /// (one readback, counted) and returns the bytes, packed in that order. For test hooks and
     /// one-off reads; the per-batch readbacks keep their own buffers.
-    fn read_copies(&mut self, label: &str, parts: &[(&wgpu::Buffer, u64, u64)]) -> Result<Vec<u8>> {
+    pub(crate) fn read_copies(
+        &mut self,
+        label: &str,
+        parts: &[(&wgpu::Buffer, u64, u64)],
+    ) -> Result<Vec<u8>> {
         let total: u64 = parts.iter().map(|p| p.2).sum();
         let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
@@ -870,6 +918,14 @@ impl GpuSolver {
 }
 
 impl Solver for GpuSolver {
+    fn save_state(&mut self) -> Result<Vec<u8>> {
+        GpuSolver::save_state(self)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> Result<()> {
+        GpuSolver::restore_state(self, state)
+    }
+
     fn advance(&mut self, events: &mut Vec<Event>) -> Result<()> {
         let start = events.len();
         while !self.finished && events.len() == start {

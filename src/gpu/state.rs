@@ -39,6 +39,10 @@ pub struct GpuState {
     /// buffer of the scene, the host-readable staging buffers of [`super::GpuSolver`] included
     /// (`readback`, `snapshot_readback`, and `search_readback` from the first contact search on).
     pub allocated: Vec<(&'static str, u64)>,
+    /// Every buffer of the scene allocated at the start (not the staging buffers), in order: what
+    /// a checkpoint saves (the contact candidates' current buffer replaces the first one after
+    /// it grew).
+    pub(crate) buffers: Vec<(&'static str, wgpu::Buffer)>,
     pub(crate) ctrl: wgpu::Buffer,
     pub(crate) nodes: wgpu::Buffer,
     pub(crate) elem_force: wgpu::Buffer,
@@ -77,6 +81,8 @@ struct Binds {
 pub(crate) struct Alloc<'a> {
     device: &'a wgpu::Device,
     list: Vec<(&'static str, u64)>,
+    /// Every buffer allocated, for checkpoints (each is copyable both ways).
+    buffers: Vec<(&'static str, wgpu::Buffer)>,
 }
 
 impl Alloc<'_> {
@@ -90,12 +96,15 @@ impl Alloc<'_> {
         let pad = [0u8; 16];
         let contents = if data.is_empty() { &pad[..] } else { data };
         self.list.push((name, contents.len() as u64));
-        self.device
+        let buffer = self
+            .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(name),
                 contents,
-                usage,
-            })
+                usage: usage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            });
+        self.buffers.push((name, buffer.clone()));
+        buffer
     }
 
     /// Records a buffer created elsewhere.
@@ -106,12 +115,14 @@ impl Alloc<'_> {
     fn zeroed(&mut self, name: &'static str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
         let size = size.max(16);
         self.list.push((name, size));
-        self.device.create_buffer(&wgpu::BufferDescriptor {
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(name),
             size,
-            usage,
+            usage: usage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
-        })
+        });
+        self.buffers.push((name, buffer.clone()));
+        buffer
     }
 }
 
@@ -180,6 +191,7 @@ impl GpuState {
         let mut a = Alloc {
             device,
             list: Vec::new(),
+            buffers: Vec::new(),
         };
 
         // Static data.
@@ -579,6 +591,7 @@ impl GpuState {
         Ok(GpuState {
             params,
             allocated: a.list,
+            buffers: a.buffers,
             ctrl,
             nodes,
             elem_force,

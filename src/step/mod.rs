@@ -165,7 +165,7 @@ pub enum Event {
 }
 
 /// Counters a backend reports in the summary.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Counters {
     /// Command-buffer submissions (GPU).
     pub submissions: u64,

@@ -744,6 +744,38 @@ impl ContactState {
         direct(pass, &k.report_end, 1);
     }
 
+    /// Gives the candidate buffer room for `cap` candidates (a new, zeroed buffer, bound in
+    /// place of the old one).
+    pub(crate) fn resize_candidates(
+        &mut self,
+        device: &wgpu::Device,
+        kernels: &ContactKernels,
+        cap: u32,
+    ) {
+        self.params.cand_capacity = cap;
+        self.params.adj_capacity = self.params.n_slots + 2 * cap;
+        let bytes = 4 * (cap as u64 + self.params.adj_capacity as u64);
+        self.grow_buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("contact_candidates"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        for e in &mut self.entries {
+            if e.0 == 14 {
+                e.1 = self.grow_buf.clone();
+            }
+        }
+        self.bind = make_bind(device, &kernels.layout, &self.entries);
+    }
+
+    /// The candidate buffer now in use.
+    pub(crate) fn candidates_buffer(&self) -> &wgpu::Buffer {
+        &self.grow_buf
+    }
+
     /// After a step stopped with [`STATE_SEARCH_GROW`] (`counters` just read back): enlarges what
     /// the search asked for, and marks a search due so that the resumed step searches again.
     ///
@@ -759,21 +791,7 @@ impl ContactState {
         if c.grow & GROW_CANDIDATES != 0 {
             let need = c.need_cand.max(self.params.cand_capacity + 1);
             let cap = (need + need / 2).next_power_of_two();
-            self.params.cand_capacity = cap;
-            self.params.adj_capacity = self.params.n_slots + 2 * cap;
-            let bytes = 4 * (cap as u64 + self.params.adj_capacity as u64);
-            self.grow_buf = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("contact_candidates"),
-                size: bytes,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            for e in &mut self.entries {
-                if e.0 == 14 {
-                    e.1 = self.grow_buf.clone();
-                }
-            }
-            self.bind = make_bind(device, &kernels.layout, &self.entries);
+            self.resize_candidates(device, kernels, cap);
         }
         if c.grow & GROW_ROUNDS != 0 {
             if self.params.jp_rounds >= MAX_COLORS {
