@@ -112,6 +112,19 @@ fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
         fail(4u, at, dt_next);
         return;
     }
+    // A last step that would carry the run past its end by more than 1 % of the run lands on it
+    // (step::clip_to_end).
+    let now = vec2<u32>(ctrl.t_lo, ctrl.t_hi);
+    let end = vec2<u32>(params.end_lo, params.end_hi);
+    if ((ctrl.flags & FLAG_END) == 0u && !ge64(now, end)) {
+        let borrow = select(0u, 1u, end.x < now.x);
+        let r = vec2<u32>(end.x - now.x, end.y - now.y - borrow);
+        let remaining = (f32(r.y) * 4294967296.0 + f32(r.x)) / params.ticks_per_second;
+        let end_s = 1099511627776.0 / params.ticks_per_second;
+        if (remaining < dt_next && dt_next - remaining > 0.01 * end_s) {
+            dt_next = remaining;
+        }
+    }
     ctrl.dt_min = min(ctrl.dt_min, dt_next);
     ctrl.dt_max = max(ctrl.dt_max, dt_next);
     if (ctrl.step == 0u) {

@@ -487,6 +487,32 @@ fn unstable_gpu_run_stops_with_a_diagnostic() {
     );
 }
 
+#[test]
+fn a_step_longer_than_the_run_or_a_short_run_ends_on_the_end_time_on_both_backends() {
+    // A soft block in free flight whose stable step (6.1 s) is longer than the run, and a run of
+    // 2.5 steps: both backends land on the end time (the GPU to its f32 tick resolution), with the
+    // same number of steps.
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for end in [0.05, 2.5 * 0.9 * 6.7914] {
+        let text = format!(
+            "[run]\nend_time = {end:e}\n[[material]]\nname = \"r\"\nmodel = \"neo_hookean\"\n\
+             density = 1000.0\nyoungs_modulus = 10.0\npoisson_ratio = 0.3\n[[body]]\nname = \"b\"\n\
+             material = \"r\"\ninitial_velocity = [2.0, -1.0]\n\
+             mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [1.0, 1.0], cells = [1, 1] }} }}\n"
+        );
+        let (c, g, uc, ug, nc, ng) = both(ctx.clone(), &text, "end_clip.toml", None);
+        assert_eq!(nc, ng, "end {end}");
+        let (tc, tg) = (c.last().unwrap().time, g.last().unwrap().time);
+        assert!((tc - end).abs() <= 1e-12 * end, "cpu: {tc} for {end}");
+        assert!((tg - end).abs() <= 1e-6 * end, "gpu: {tg} for {end}");
+        // Free flight: u = v T at the end.
+        for u in uc.iter().chain(&ug) {
+            assert!((u[0] - 2.0 * end).abs() <= 1e-5 * end, "{u:?} for {end}");
+        }
+    }
+}
+
 /// The vibrating block with a pressure load on its top edge (ramped over 1 ms), mass damping, or both.
 fn loaded_block(pressure: bool, damping: bool) -> String {
     let mut text = asset("vibrating_block.toml");

@@ -451,6 +451,7 @@ impl CpuSolver {
             );
             return self.fail(events, msg);
         }
+        let dt_next = super::clip_to_end(dt_next, s.end_time - self.t, s.end_time, at_end);
         self.dt_range = (self.dt_range.0.min(dt_next), self.dt_range.1.max(dt_next));
         // 3. Node stage.
         let dt_n = if self.n == 0 {

@@ -197,6 +197,52 @@ fn binary_fields_hold_the_ascii_values_in_a_quarter_of_the_bytes() {
     let _ = std::fs::remove_dir_all(&base);
 }
 
+#[test]
+fn a_step_longer_than_the_run_or_a_short_run_ends_on_the_end_time() {
+    // A soft 1 x 1 m block in free flight: one stable step (6.1 s) is longer than the run
+    // (0.05 s); 2.5 steps and 40.5 steps; and a long run, which keeps its steps and ends less
+    // than one step (and less than 1 % of the run) past the end. (Free flight: a deforming block
+    // at the stability limit would also show the energy audit's sensitivity to a shortened step
+    // in a run of three steps, see `step::clip_to_end`.)
+    let text = |end: f64| {
+        format!(
+            "[run]\nend_time = {end:e}\nhistory_interval = {end:e}\n\n[[material]]\nname = \"rubber\"\n\
+             model = \"neo_hookean\"\ndensity = 1000.0\nyoungs_modulus = 10.0\npoisson_ratio = 0.3\n\n\
+             [[body]]\nname = \"b\"\nmaterial = \"rubber\"\ninitial_velocity = [2.0, -1.0]\n\
+             mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [1.0, 1.0], cells = [1, 1] }} }}\n"
+        )
+    };
+    let base = tmp_dir("end-clip");
+    let dt = 0.9 * 6.7914; // time_step_scale x the stable step `check` prints
+    for (end, steps) in [
+        (0.05, 1u64),
+        (2.5 * dt, 3),
+        (40.5 * dt, 41),
+        (1000.3 * dt, 1001),
+    ] {
+        let scene = base.join("s.toml");
+        std::fs::write(&scene, text(end)).unwrap();
+        let out = base.join("o");
+        let o = run_cpu(&scene, &out, &[]);
+        assert_eq!(o.status.code(), Some(0), "{o:?}");
+        let s = summary(&out);
+        let t = s["end_time"].as_f64().unwrap();
+        assert_eq!(s["status"], "completed");
+        assert_eq!(s["steps"].as_u64().unwrap(), steps, "end {end}");
+        if steps < 1000 {
+            assert!((t - end).abs() <= 1e-12 * end, "end {end}: t = {t}");
+        } else {
+            assert!(
+                t >= end && t - end < 0.01 * end && t - end < dt,
+                "end {end}: t = {t}"
+            );
+        }
+        let (header, rows) = read_csv(&out.join("history.csv"));
+        assert_eq!(rows.last().unwrap()[column(&header, "time")], t);
+    }
+    let _ = std::fs::remove_dir_all(&base);
+}
+
 /// Relative rounding of single and double precision.
 const F32_ROUNDING: f64 = 5.96e-8;
 const F64_ROUNDING: f64 = 1.12e-16;
