@@ -1288,6 +1288,18 @@ impl Validator<'_> {
                         ));
                     }
                 }
+                let area = (r.size[0] / r.cells[0] as f64) * (r.size[1] / r.cells[1] as f64);
+                if !area.is_normal() {
+                    return Err(self.invalid(
+                        format!("{k}.size"),
+                        format!("{:?}", r.size),
+                        &format!(
+                            "each cell's area ({area:e} m^2 with cells = {:?}) must be a finite, \
+                             normal floating-point number",
+                            r.cells
+                        ),
+                    ));
+                }
                 Ok(MeshSpec::Rectangle {
                     origin: r.origin,
                     size: r.size,

@@ -265,6 +265,16 @@ fn negative_rectangle_size() {
 }
 
 #[test]
+fn rectangle_whose_cell_area_overflows_names_the_size_not_convexity() {
+    let msg = expect_rejected(
+        "overflowing_size",
+        &variant("size = [0.1, 0.05]", "size = [1e300, 1e300]"),
+        &["body[0].mesh.rectangle.size", "[1e300, 1e300]", "area"],
+    );
+    assert!(!msg.contains("convex"), "{msg}");
+}
+
+#[test]
 fn non_positive_thickness() {
     expect_rejected(
         "zero_thickness",
