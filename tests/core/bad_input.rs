@@ -229,6 +229,30 @@ fn runs_that_would_never_end_are_refused_naming_the_key_and_the_limit() {
 }
 
 #[test]
+fn spinning_rubber_disk_against_a_penalty_wall_through_its_rim_ends() {
+    // Issue 16 case 2: a 10 MPa rubber disk spinning at 200 rad/s against a penalty wall placed
+    // 5 mm inside its rim used to hang. The overlap is moved onto the wall at t = 0 and the run
+    // ends in about 10^4 steps with its energy balance.
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/spinning_disk.toml"),
+    )
+    .unwrap()
+        + "\n[[rigid_wall]]\npoint = [0.0, -0.045]\nnormal = [0.0, 1.0]\nmethod = \"penalty\"\n";
+    let (dir, file) = write_scene("spinning_rim", &text);
+    let out = dir.join("out");
+    let o = run_cpu(&file, &out, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["status"], "completed");
+    let steps = s["steps"].as_u64().unwrap();
+    assert!(steps > 1000 && steps < 100_000, "{steps} steps");
+    assert!(s["max_energy_error"].as_f64().unwrap() < 1e-4, "{s}");
+    assert!(s["contact_searches"].as_u64().unwrap() < steps / 10, "{s}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn duplicate_body_name() {
     let text = format!("{}{BODY}", valid());
     expect_rejected("duplicate_body", &text, &["body[1].name", "\"block\""]);
