@@ -1245,6 +1245,18 @@ impl Validator<'_> {
                     }
                 }
             }
+            // Quads that overlap without sharing an edge (one laid over others).
+            if let Some((i, j)) = crate::mesh::overlapping_quads(nodes, &out) {
+                return Err(self.invalid(
+                    format!("{key}.quads[{j}]"),
+                    format!("{:?}", quads[j]),
+                    &format!(
+                        "overlaps quads[{i}] = {:?}: their interiors intersect (a quad laid over \
+                         others; quads may share edges and corners only)",
+                        quads[i]
+                    ),
+                ));
+            }
             return Ok(MeshSpec::Explicit {
                 nodes: nodes.clone(),
                 quads: out,

@@ -542,6 +542,64 @@ fn duplicate_or_overlapping_quads_of_an_explicit_mesh_are_refused() {
     );
     // Two quads sharing the edge 1-4 in opposite directions are fine.
     expect_accepted("quads_ok", &mesh("[[0, 1, 4, 3], [1, 2, 5, 4]]"), false);
+    // A quad laid over two others, sharing no edge with either (own nodes 6-9), and a small one
+    // inside a large one; a quad touching others at a corner only is fine.
+    let over = |nodes: &str, quads: &str| {
+        variant(
+            "mesh = { rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }",
+            &format!(
+                "mesh = {{ nodes = [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [0.0, 1.0], [1.0, 1.0], \
+                 [2.0, 1.0], {nodes}], quads = {quads} }}"
+            ),
+        )
+    };
+    expect_rejected(
+        "quad_laid_over",
+        &over(
+            "[0.5, 0.2], [1.5, 0.2], [1.5, 0.8], [0.5, 0.8]",
+            "[[0, 1, 4, 3], [1, 2, 5, 4], [6, 7, 8, 9]]",
+        ),
+        &["quads[2]", "overlaps quads[0]", "interiors intersect"],
+    );
+    expect_rejected(
+        "quad_inside",
+        &over(
+            "[0.4, 0.4], [0.6, 0.4], [0.6, 0.6], [0.4, 0.6]",
+            "[[6, 7, 8, 9], [0, 1, 4, 3], [1, 2, 5, 4]]",
+        ),
+        &["quads[1]", "overlaps quads[0]", "interiors intersect"],
+    );
+    expect_accepted(
+        "quad_corner_touch",
+        &over(
+            "[3.0, 1.0], [3.0, 2.0], [2.0, 2.0]",
+            "[[0, 1, 4, 3], [1, 2, 5, 4], [5, 6, 7, 8]]",
+        ),
+        false,
+    );
+}
+
+#[test]
+fn overlap_check_finds_one_overlap_among_many_quads_by_its_grid() {
+    // 200 x 200 quads of a generated grid (40 000): none overlap; then one quad moved over its
+    // diagonal neighbour is found, and the check takes about one pass.
+    let mesh = ricochet::mesh::rectangle([0.0, 0.0], [1.0, 1.0], [200, 200]);
+    assert_eq!(
+        ricochet::mesh::overlapping_quads(&mesh.nodes, &mesh.quads),
+        None
+    );
+    let mut nodes = mesh.nodes.clone();
+    let mut quads = mesh.quads.clone();
+    let base = nodes.len() as u32;
+    let h = 1.0 / 200.0;
+    for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+        nodes.push([0.5 + 0.5 * h + dx * h, 0.5 + 0.5 * h + dy * h]);
+    }
+    quads.push([base, base + 1, base + 2, base + 3]);
+    let found = ricochet::mesh::overlapping_quads(&nodes, &quads).expect("the overlap is found");
+    assert_eq!(found.1, quads.len() - 1);
+    // The four quads it covers in part: (100, 100), (101, 100), (100, 101), (101, 101).
+    assert!([100 * 200 + 100, 100 * 200 + 101].contains(&found.0), "{found:?}");
 }
 
 #[test]
