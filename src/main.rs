@@ -251,6 +251,30 @@ fn load(path: &Path, end_time: Option<f64>) -> anyhow::Result<(Scene, Model, Pla
     Ok((scene, model, plan))
 }
 
+/// The GPU solver of a scene on `ctx`, after checking that its buffers fit the adapter.
+fn gpu_solver(
+    ctx: GpuContext,
+    scene: &Scene,
+    model: &Model,
+    plan: &Plan,
+    schedule: ricochet::step::Schedule,
+) -> anyhow::Result<Box<dyn Solver>> {
+    let limits = ctx.device.limits();
+    ricochet::run::check_gpu_limits(
+        scene,
+        model,
+        &ctx.adapter_name(),
+        u64::from(limits.max_storage_buffer_binding_size),
+        limits.max_buffer_size,
+    )?;
+    Ok(Box::new(GpuSolver::new(
+        Arc::new(ctx),
+        model,
+        plan,
+        schedule,
+    )?))
+}
+
 /// The checks of a loaded scene, its model and its plan.
 fn prepare(scene: &Scene) -> anyhow::Result<(Model, Plan)> {
     ricochet::run::check_memory(scene)?;
@@ -552,7 +576,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         );
                         cpu()
                     }
-                    Ok(ctx) => Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?),
+                    Ok(ctx) => gpu_solver(ctx, &scene, &model, &plan, schedule)?,
                     Err(e) => {
                         eprintln!("notice: {e}; running on the CPU");
                         cpu()
@@ -560,7 +584,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                 },
                 Backend::Gpu => {
                     let ctx = GpuContext::new(adapter.as_deref())?;
-                    Box::new(GpuSolver::new(Arc::new(ctx), &model, &plan, schedule)?)
+                    gpu_solver(ctx, &scene, &model, &plan, schedule)?
                 }
             };
             if let Some(c) = resume.as_ref().filter(|c| c.adapter != solver.adapter()) {

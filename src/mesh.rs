@@ -296,16 +296,25 @@ fn quads_overlap(a: &[[f64; 2]; 4], b: &[[f64; 2]; 4], tol: f64) -> bool {
 /// a uniform grid of the quads' bounding boxes, cells of the median quad size, so the check costs
 /// about one pass over the quads.
 pub fn overlapping_quads(nodes: &[[f64; 2]], quads: &[[u32; 4]]) -> Option<(usize, usize)> {
-    let corners: Vec<[[f64; 2]; 4]> = quads
-        .iter()
-        .map(|q| q.map(|i| nodes[i as usize]))
-        .collect();
+    let corners: Vec<[[f64; 2]; 4]> = quads.iter().map(|q| q.map(|i| nodes[i as usize])).collect();
     let boxes: Vec<[f64; 4]> = corners
         .iter()
         .map(|c| {
             c.iter().fold(
-                [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
-                |b, p| [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])],
+                [
+                    f64::INFINITY,
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::NEG_INFINITY,
+                ],
+                |b, p| {
+                    [
+                        b[0].min(p[0]),
+                        b[1].min(p[1]),
+                        b[2].max(p[0]),
+                        b[3].max(p[1]),
+                    ]
+                },
             )
         })
         .collect();

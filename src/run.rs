@@ -79,23 +79,7 @@ pub fn check_memory(scene: &Scene) -> Result<()> {
         return Ok(());
     }
     let counts = element_counts(scene);
-    let (bi, &n) = counts
-        .iter()
-        .enumerate()
-        .max_by_key(|(_, n)| **n)
-        .unwrap_or((0, &0));
-    let (key, value) = match &scene.bodies[bi].mesh {
-        crate::scene::MeshSpec::Rectangle { cells, .. } => (
-            format!("body[{bi}].mesh.rectangle.cells"),
-            format!("{cells:?}"),
-        ),
-        crate::scene::MeshSpec::Disk { cells, .. } => {
-            (format!("body[{bi}].mesh.disk.cells"), format!("{cells}"))
-        }
-        crate::scene::MeshSpec::Explicit { .. } => {
-            (format!("body[{bi}].mesh.quads"), format!("{n} quads"))
-        }
-    };
+    let (key, value) = largest_mesh(scene);
     let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
     Err(Error::Invalid {
         file: scene.file.clone(),
@@ -107,6 +91,68 @@ pub fn check_memory(scene: &Scene) -> Result<()> {
             counts.iter().sum::<u64>(),
             gib(need),
             gib(have)
+        ),
+    })
+}
+
+/// The mesh key and value of the body with the most elements (for messages about sizes).
+fn largest_mesh(scene: &Scene) -> (String, String) {
+    let counts = element_counts(scene);
+    let (bi, &n) = counts
+        .iter()
+        .enumerate()
+        .max_by_key(|(_, n)| **n)
+        .unwrap_or((0, &0));
+    match scene.bodies.get(bi).map(|b| &b.mesh) {
+        Some(crate::scene::MeshSpec::Rectangle { cells, .. }) => (
+            format!("body[{bi}].mesh.rectangle.cells"),
+            format!("{cells:?}"),
+        ),
+        Some(crate::scene::MeshSpec::Disk { cells, .. }) => {
+            (format!("body[{bi}].mesh.disk.cells"), format!("{cells}"))
+        }
+        Some(crate::scene::MeshSpec::Explicit { .. }) | None => {
+            (format!("body[{bi}].mesh.quads"), format!("{n} quads"))
+        }
+    }
+}
+
+/// Bytes per element of the GPU backend's largest per-element buffer (`elements`: corners,
+/// nodes and body of each quad, in f32), and per node and element of its largest mixed one
+/// (`sample_sources`).
+pub const GPU_BYTES_PER_ELEMENT: u64 = 64;
+/// See [`GPU_BYTES_PER_ELEMENT`].
+pub const GPU_SAMPLE_BYTES: u64 = 16;
+
+/// Refuses, before anything is uploaded, a model whose largest GPU buffer would exceed the
+/// adapter's largest storage binding or buffer (`max_binding`, `max_buffer` bytes), naming the
+/// mesh key of the largest body.
+///
+/// # Errors
+/// [`Error::Invalid`] naming the key, the value, the buffer and the limit.
+pub fn check_gpu_limits(
+    scene: &Scene,
+    model: &Model,
+    adapter: &str,
+    max_binding: u64,
+    max_buffer: u64,
+) -> Result<()> {
+    let (ne, nn) = (model.element_count() as u64, model.node_count() as u64);
+    let limit = max_binding.min(max_buffer);
+    let need = (GPU_BYTES_PER_ELEMENT * ne).max(GPU_SAMPLE_BYTES * (ne + nn));
+    if need <= limit {
+        return Ok(());
+    }
+    let (key, value) = largest_mesh(scene);
+    let per = (limit / GPU_BYTES_PER_ELEMENT).min(limit / (2 * GPU_SAMPLE_BYTES));
+    Err(Error::Invalid {
+        file: scene.file.clone(),
+        key,
+        value,
+        reason: format!(
+            "{ne} elements and {nn} nodes need a GPU buffer of {need} bytes, more than the {limit} \
+             bytes of the largest buffer binding of {adapter} (about {per} elements at most on it); \
+             run it with --backend cpu or on a larger adapter"
         ),
     })
 }

@@ -599,7 +599,10 @@ fn overlap_check_finds_one_overlap_among_many_quads_by_its_grid() {
     let found = ricochet::mesh::overlapping_quads(&nodes, &quads).expect("the overlap is found");
     assert_eq!(found.1, quads.len() - 1);
     // The four quads it covers in part: (100, 100), (101, 100), (100, 101), (101, 101).
-    assert!([100 * 200 + 100, 100 * 200 + 101].contains(&found.0), "{found:?}");
+    assert!(
+        [100 * 200 + 100, 100 * 200 + 101].contains(&found.0),
+        "{found:?}"
+    );
 }
 
 #[test]

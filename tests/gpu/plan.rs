@@ -222,3 +222,63 @@ fn gpu_bench_reports_the_full_over_bare_ratio_and_the_contact_share_at_a_tiny_si
     assert!(r.contact_seconds_per_step.is_finite());
     assert!(r.contact_searches >= 1);
 }
+
+#[test]
+fn a_model_beyond_the_adapters_largest_buffer_is_refused_up_front_naming_its_mesh() {
+    // A block just large enough that its element buffer (64 bytes per element) exceeds this
+    // adapter's largest storage binding: `run --backend gpu` exits 2 naming the mesh key and the
+    // limit, before meshing onto the device. (Where the CPU memory check refuses such a size
+    // first, the message names the memory instead: still exit 2 and the key.)
+    let Some(ctx) = context() else { return };
+    let limits = ctx.device.limits();
+    let limit = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+    let n = ((limit / ricochet::run::GPU_BYTES_PER_ELEMENT + 1) as f64)
+        .sqrt()
+        .ceil() as u64;
+    let dir = std::env::temp_dir().join(format!("ricochet-gpu-limit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("big.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[run]\nend_time = 1.0e-9\n[[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\n\
+             density = 7850.0\nyoungs_modulus = 2.1e11\npoisson_ratio = 0.3\n[[body]]\nname = \"b\"\n\
+             material = \"steel\"\nmesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [1.0, 1.0], \
+             cells = [{n}, {n}] }} }}\n"
+        ),
+    )
+    .unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_ricochet"))
+        .args(["run", scene.to_str().unwrap(), "--backend", "gpu", "--out"])
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("body[0].mesh.rectangle.cells") && err.contains(&format!("[{n}, {n}]")),
+        "{err}"
+    );
+    assert!(
+        (err.contains("largest buffer binding") && err.contains(&limit.to_string()))
+            || err.contains("available"),
+        "{err}"
+    );
+
+    // The check itself, against a limit one byte short and one exactly met.
+    let text = format!(
+        "[run]\nend_time = 1.0e-9\n[[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\n\
+         density = 7850.0\nyoungs_modulus = 2.1e11\npoisson_ratio = 0.3\n[[body]]\nname = \"b\"\n\
+         material = \"steel\"\nmesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [1.0, 1.0], \
+         cells = [10, 10] }} }}\n"
+    );
+    let (scene, model, _) = load(&text, "small.toml");
+    let need = ricochet::run::GPU_BYTES_PER_ELEMENT * 100;
+    assert!(ricochet::run::check_gpu_limits(&scene, &model, "x", need, need).is_ok());
+    let e = ricochet::run::check_gpu_limits(&scene, &model, "x", need - 1, need).unwrap_err();
+    assert!(
+        e.to_string().contains("body[0].mesh.rectangle.cells"),
+        "{e}"
+    );
+}
