@@ -222,41 +222,6 @@ pub fn graded_disk(
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rectangle_counts_and_area() {
-        let m = rectangle([1.0, 2.0], [2.0, 1.0], [4, 3]);
-        assert_eq!(m.nodes.len(), 20);
-        assert_eq!(m.quads.len(), 12);
-        let area: f64 = (0..m.quads.len()).map(|q| m.quad_area(q)).sum();
-        assert!((area - 2.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn disk_is_valid_and_closed() {
-        for n in [2, 3, 8, 16] {
-            let r = 0.05;
-            let m = disk([0.0, 0.0], r, n);
-            let mm = (n / 2).max(1);
-            assert_eq!(m.quads.len(), n * n + 4 * n * mm);
-            // Euler: V - E + F = 1 for a disk; E = (4F + boundary edges)/2, boundary edges = 4n.
-            let edges = (4 * m.quads.len() + 4 * n) / 2;
-            assert_eq!(m.nodes.len() + m.quads.len(), edges + 1);
-            for q in 0..m.quads.len() {
-                assert!(m.quad_area(q) > 0.0, "n={n} quad {q} not counter-clockwise");
-            }
-            let area: f64 = (0..m.quads.len()).map(|q| m.quad_area(q)).sum();
-            // The polygon inscribed in the circle with 4n sides.
-            let k = 4 * n;
-            let polygon = 0.5 * k as f64 * r * r * (2.0 * std::f64::consts::PI / k as f64).sin();
-            assert!((area - polygon).abs() < 1e-12 * r * r, "n={n}");
-        }
-    }
-}
-
 /// Whether quad `q` of `nodes` is strictly convex and counter-clockwise.
 fn convex_ccw(nodes: &[[f64; 2]], q: &[u32; 4]) -> bool {
     let p = q.map(|i| nodes[i as usize]);
@@ -391,4 +356,39 @@ pub fn overlapping_quads(nodes: &[[f64; 2]], quads: &[[u32; 4]]) -> Option<(usiz
         }
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rectangle_counts_and_area() {
+        let m = rectangle([1.0, 2.0], [2.0, 1.0], [4, 3]);
+        assert_eq!(m.nodes.len(), 20);
+        assert_eq!(m.quads.len(), 12);
+        let area: f64 = (0..m.quads.len()).map(|q| m.quad_area(q)).sum();
+        assert!((area - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn disk_is_valid_and_closed() {
+        for n in [2, 3, 8, 16] {
+            let r = 0.05;
+            let m = disk([0.0, 0.0], r, n);
+            let mm = (n / 2).max(1);
+            assert_eq!(m.quads.len(), n * n + 4 * n * mm);
+            // Euler: V - E + F = 1 for a disk; E = (4F + boundary edges)/2, boundary edges = 4n.
+            let edges = (4 * m.quads.len() + 4 * n) / 2;
+            assert_eq!(m.nodes.len() + m.quads.len(), edges + 1);
+            for q in 0..m.quads.len() {
+                assert!(m.quad_area(q) > 0.0, "n={n} quad {q} not counter-clockwise");
+            }
+            let area: f64 = (0..m.quads.len()).map(|q| m.quad_area(q)).sum();
+            // The polygon inscribed in the circle with 4n sides.
+            let k = 4 * n;
+            let polygon = 0.5 * k as f64 * r * r * (2.0 * std::f64::consts::PI / k as f64).sin();
+            assert!((area - polygon).abs() < 1e-12 * r * r, "n={n}");
+        }
+    }
 }
