@@ -264,7 +264,7 @@ fn gpu_solver(
         scene,
         model,
         &ctx.adapter_name(),
-        u64::from(limits.max_storage_buffer_binding_size),
+        limits.max_storage_buffer_binding_size,
         limits.max_buffer_size,
     )?;
     Ok(Box::new(GpuSolver::new(

@@ -231,7 +231,9 @@ fn a_model_beyond_the_adapters_largest_buffer_is_refused_up_front_naming_its_mes
     // first, the message names the memory instead: still exit 2 and the key.)
     let Some(ctx) = context() else { return };
     let limits = ctx.device.limits();
-    let limit = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+    let limit = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
     let n = ((limit / ricochet::run::GPU_BYTES_PER_ELEMENT + 1) as f64)
         .sqrt()
         .ceil() as u64;
