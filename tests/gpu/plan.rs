@@ -269,13 +269,12 @@ fn a_model_beyond_the_adapters_largest_buffer_is_refused_up_front_naming_its_mes
     );
 
     // The check itself, against a limit one byte short and one exactly met.
-    let text = format!(
+    let text =
         "[run]\nend_time = 1.0e-9\n[[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\n\
          density = 7850.0\nyoungs_modulus = 2.1e11\npoisson_ratio = 0.3\n[[body]]\nname = \"b\"\n\
-         material = \"steel\"\nmesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [1.0, 1.0], \
-         cells = [10, 10] }} }}\n"
-    );
-    let (scene, model, _) = load(&text, "small.toml");
+         material = \"steel\"\nmesh = { rectangle = { origin = [0.0, 0.0], size = [1.0, 1.0], \
+         cells = [10, 10] } }\n";
+    let (scene, model, _) = load(text, "small.toml");
     let need = ricochet::run::GPU_BYTES_PER_ELEMENT * 100;
     assert!(ricochet::run::check_gpu_limits(&scene, &model, "x", need, need).is_ok());
     let e = ricochet::run::check_gpu_limits(&scene, &model, "x", need - 1, need).unwrap_err();
