@@ -21,8 +21,15 @@ pub enum Error {
         /// What the parser said (it names line, column and key).
         message: String,
     },
-    /// A key has a value that is not allowed.
-    #[error("{file}: key `{key}` = {value}: {reason}")]
+    /// A key has a value that is not allowed. The message shows at most [`VALUE_CHARS`]
+    /// characters of the key and the value and [`REASON_CHARS`] of the reason (a string value
+    /// can be as long as the file: a 100 000-character `model` made a message of 100 KB).
+    #[error(
+        "{file}: key `{}` = {}: {}",
+        clip(.key, VALUE_CHARS),
+        clip(.value, VALUE_CHARS),
+        clip(.reason, REASON_CHARS)
+    )]
     Invalid {
         /// The file.
         file: PathBuf,
@@ -56,6 +63,19 @@ pub enum Error {
     /// The GPU backend could not be used.
     #[error("GPU: {0}")]
     Gpu(String),
+}
+
+/// Characters of the key and of the value shown in the message of [`Error::Invalid`].
+pub const VALUE_CHARS: usize = 200;
+/// Characters of the reason shown in the message of [`Error::Invalid`].
+pub const REASON_CHARS: usize = 1000;
+
+/// `s` cut to `n` characters, saying how long it was.
+fn clip(s: &str, n: usize) -> std::borrow::Cow<'_, str> {
+    match s.char_indices().nth(n) {
+        Some((i, _)) => format!("{}... ({} characters in all)", &s[..i], s.chars().count()).into(),
+        None => s.into(),
+    }
 }
 
 /// Shorthand for results with [`Error`].

@@ -21,6 +21,9 @@
 //! - [`plan`]: a scene pays only for what it uses: the exact stages of the plan, `ricochet check`
 //!   printing it, no contact state without contact, and `ricochet bench` reporting its ratios;
 //! - [`bad_input`]: every rejected scene exits with status 2 and names the file, key and value;
+//! - [`fuzz`]: 2000 mutants of the scenes of `assets/` through the load path and a short CPU run
+//!   (and a sample through `ricochet check`): no panic, hang, escaped file, unbounded memory or
+//!   non-finite number in a completed run;
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs;
 //! - [`plot`]: `ricochet plot` and `run --plots`: every picture at its size, identical bytes twice,
 //!   GIF frames, the colour of the patch test's uniform stress, refused folders and fields;
@@ -37,6 +40,8 @@ mod bad_input;
 mod contact;
 #[path = "core/energy.rs"]
 mod energy;
+#[path = "core/fuzz.rs"]
+mod fuzz;
 #[path = "core/general_contact.rs"]
 mod general_contact;
 #[path = "core/hourglass.rs"]

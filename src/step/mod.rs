@@ -96,19 +96,50 @@ impl Clock {
         }
     }
 
+    /// The first index k >= `from` whose time k * `interval` is not due at `t`: what walking
+    /// k += 1 from `from` finds (due-ness only falls as k grows), by an exponential search and a
+    /// bisection instead. A walk passes dt / interval indices in one step, without bound where
+    /// the step dwarfs the interval (a last step of 1e141 s past end_time = 2e-5 s with
+    /// history_interval = 1e-6 s, from a density of 1e300, walked 1e147 indices: a hang).
+    /// Saturates at `u64::MAX`.
+    fn first_not_due(from: u64, t: f64, dt_prev: f64, interval: f64) -> u64 {
+        let due = |k: u64| Self::due(t, dt_prev, k as f64 * interval);
+        if !due(from) {
+            return from;
+        }
+        // Invariant: `lo` is due; `hi` is not (or is u64::MAX).
+        let (mut lo, mut hi, mut stride) = (from, from, 1u64);
+        while hi < u64::MAX {
+            hi = lo.saturating_add(stride);
+            if !due(hi) {
+                break;
+            }
+            lo = hi;
+            stride = stride.saturating_mul(2);
+        }
+        if hi == u64::MAX && due(hi) {
+            return u64::MAX;
+        }
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if due(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        hi
+    }
+
     /// Advances the sample index past every time due at `t`.
     pub fn took_sample(&mut self, s: &Schedule, t: f64, dt_prev: f64) {
-        while Self::due(t, dt_prev, self.next_sample as f64 * s.history_interval) {
-            self.next_sample += 1;
-        }
+        self.next_sample = Self::first_not_due(self.next_sample, t, dt_prev, s.history_interval);
     }
 
     /// Advances the snapshot index past every time due at `t`.
     pub fn took_snapshot(&mut self, s: &Schedule, t: f64, dt_prev: f64) {
         if let Some(fi) = s.field_interval {
-            while Self::due(t, dt_prev, self.next_snapshot as f64 * fi) {
-                self.next_snapshot += 1;
-            }
+            self.next_snapshot = Self::first_not_due(self.next_snapshot, t, dt_prev, fi);
         }
     }
 }

@@ -275,7 +275,7 @@ impl Case {
     pub fn parse(text: &str, path: &Path) -> Result<Case> {
         let mut case: Case = toml::from_str(text).map_err(|e| Error::Parse {
             file: path.to_path_buf(),
-            message: e.to_string().trim_end().to_string(),
+            message: crate::scene::toml_message(text, &e),
         })?;
         case.file = path.to_path_buf();
         let invalid = |key: &str, value: String, reason: &str| Error::Invalid {

@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 use std::process::Output;
+use std::time::{Duration, Instant};
 
 use crate::common::*;
 
@@ -913,4 +914,171 @@ fn mass_damping_is_checked() {
         ),
         &["run.mass_damping", "inf", ">= 0"],
     );
+}
+
+/// `ricochet run SCENE --backend cpu --out OUT`, killed (and the test failed) after `limit`.
+fn run_cpu_within(scene: &std::path::Path, out: &std::path::Path, limit: Duration) -> Output {
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(bin())
+        .args(["run", scene.to_str().unwrap(), "--backend", "cpu", "--out"])
+        .arg(out)
+        .env_remove("RUST_BACKTRACE")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("cannot start the ricochet binary");
+    let t0 = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if t0.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!(
+                "`ricochet run {}` still running after {limit:?}",
+                scene.display()
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn a_first_step_far_beyond_the_end_time_ends_the_run_at_once() {
+    // Found by the fuzz test. A density of 1e300 makes the stable step about 1e141 s: the first
+    // step passes end_time, and the clock walked the 1e147 history (and snapshot) times that
+    // step passed one by one: the run never ended.
+    let text = variant("density = 7850.0", "density = 1e300")
+        .replace(
+            "cells = [4, 2] } }\n",
+            "cells = [4, 2] } }\nhourglass = { form = \"stiffness\" }\n",
+        )
+        .replace(
+            "end_time = 1.0e-5\n",
+            "end_time = 1.0e-5\nhistory_interval = 1.0e-6\nfield_interval = 1.0e-6\n\
+         bulk_viscosity = { linear = 0.0, quadratic = 0.0 }\n",
+        );
+    let (dir, file) = write_scene("huge_first_step", &text);
+    let out = dir.join("out");
+    let o = run_cpu_within(&file, &out, Duration::from_secs(60));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "completed", "{summary}");
+    assert_eq!(summary["steps"], 1, "{summary}");
+    assert_eq!(summary["history_rows"], 2, "{summary}");
+    assert_eq!(summary["snapshots"], 2, "{summary}");
+    let _ = std::fs::remove_dir_all(&dir);
+
+    // The clock's jump finds the index a walk finds.
+    use ricochet::step::{Clock, Schedule, TIME_SLACK};
+    for (t, dt, interval) in [
+        (0.0, 0.0, 1e-6),
+        (1e-6, 1e-6, 1e-6),
+        (3.3e-6, 4.35e-6, 1e-7),
+        (7.0e-4, 1.1e-7, 1e-5),
+        (1.0, 0.25, 0.1),
+        (5e-3, 5e-3, 1e-9),
+    ] {
+        let s = Schedule {
+            end_time: 1e9,
+            history_interval: interval,
+            field_interval: Some(interval),
+            time_step_scale: 0.9,
+            time_step: None,
+        };
+        for from in [0, 3] {
+            let mut walk = from;
+            while t + TIME_SLACK * dt >= walk as f64 * interval {
+                walk += 1;
+            }
+            let mut c = Clock {
+                next_sample: from,
+                next_snapshot: from,
+            };
+            c.took_sample(&s, t, dt);
+            c.took_snapshot(&s, t, dt);
+            assert_eq!(
+                c.next_sample, walk,
+                "t {t:e}, dt {dt:e}, interval {interval:e}"
+            );
+            assert_eq!(c.next_snapshot, walk);
+        }
+    }
+    // Beyond u64: saturates.
+    let s = Schedule {
+        end_time: 1e-5,
+        history_interval: 1e-6,
+        field_interval: None,
+        time_step_scale: 0.9,
+        time_step: None,
+    };
+    let mut c = Clock::new();
+    c.took_sample(&s, 3.5e141, 3.5e141);
+    assert_eq!(c.next_sample, u64::MAX);
+}
+
+#[test]
+fn parse_errors_quote_a_window_of_a_long_line() {
+    // Found by the fuzz test. The nodes of an explicit mesh on one line (as in
+    // assets/ring_crush.toml, 16 KB) with a typo far into it: the parser's message quoted the
+    // whole line, and its caret line had as many spaces as the column.
+    let nodes: Vec<String> = (0..2000).map(|i| format!("[{i}.0, 0.0]")).collect();
+    let line = nodes.join(", ").replace("[1000.0, 0.0]", "[1000.0, 0.0x]");
+    let text = format!(
+        "{}\n[[body]]\nname = \"mesh\"\nmaterial = \"steel\"\nmesh = {{ nodes = [{line}], quads = [[0, 1, 2, 3]] }}\n",
+        valid()
+    );
+    let line_no = text.lines().position(|l| l.contains("nodes = ")).unwrap() + 1;
+    let err = expect_rejected(
+        "long_line",
+        &text,
+        &[
+            &format!("TOML parse error at line {line_no}, column "),
+            "0.0x]",
+            "^",
+        ],
+    );
+    assert!(err.len() < 1000, "message of {} bytes:\n{err}", err.len());
+}
+
+#[test]
+fn long_values_are_cut_in_messages() {
+    // Found by the fuzz test. A rejected string value was quoted whole: a `model` of 100 000
+    // characters gave a message of 100 KB.
+    let long = "x".repeat(100_000);
+    let err = expect_rejected(
+        "long_model",
+        &variant("model = \"linear_elastic\"", &format!("model = \"{long}\"")),
+        &[
+            "material[0].model",
+            "\"xxxx",
+            "100002 characters in all",
+            "unknown model",
+        ],
+    );
+    assert!(err.len() < 1000, "message of {} bytes", err.len());
+}
+
+#[test]
+fn bulk_viscosity_quadratic_is_bounded() {
+    // Found by the fuzz test. A quadratic coefficient of 9.2e18 was accepted: the step it allows
+    // in compression (even at the round-off strain rates of rigid motion) fell 350-fold after
+    // t = 0, where the first-step limits do not look, and a run to 1 ms took hours.
+    expect_rejected(
+        "bulk_quadratic_huge",
+        &variant(
+            "end_time = 1.0e-5\n",
+            "end_time = 1.0e-5\nbulk_viscosity = { quadratic = 9223372036854775807 }\n",
+        ),
+        &[
+            "run.bulk_viscosity.quadratic",
+            "9.223372036854776e18",
+            "must not exceed 10",
+        ],
+    );
+    let text = variant(
+        "end_time = 1.0e-5\n",
+        "end_time = 1.0e-5\nbulk_viscosity = { quadratic = 10.0 }\n",
+    );
+    expect_accepted("bulk_quadratic_10", &text, true);
 }

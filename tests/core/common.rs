@@ -94,8 +94,7 @@ pub fn assemble(model: &Model, u: &[[f64; 2]], v: &[[f64; 2]]) -> Vec<[f64; 2]> 
 }
 
 /// A schedule that samples every step, no fields. `interval` must be below the smallest step
-/// (the clock then finds a sample due at every t_n), but not by orders of magnitude: the clock
-/// walks the sample times it passes one by one.
+/// (the clock then finds a sample due at every t_n).
 pub fn every_step(end_time: f64, time_step: Option<f64>, scale: f64, interval: f64) -> Schedule {
     Schedule {
         end_time,
