@@ -74,6 +74,8 @@ pub const SCENE_MAX_BYTES: u64 = 64 << 20;
 
 /// Longest body name (bytes).
 pub const NAME_MAX: usize = 64;
+/// Longest contact or rigid-wall name (characters): it heads four `history.csv` columns.
+pub const CONTACT_NAME_MAX: usize = 256;
 
 /// Default safety factor on the stable time step.
 pub const DEFAULT_TIME_STEP_SCALE: f64 = 0.9;
@@ -826,11 +828,31 @@ impl Validator<'_> {
         }
         if name.is_empty() || name.contains([',', '"']) || name.chars().any(char::is_control) {
             let shown: String = name.chars().take(40).collect();
+            let more = if name.chars().count() > 40 { "..." } else { "" };
             return Err(self.invalid(
                 format!("{key}.name"),
-                format!("{shown:?}"),
-                "must be non-empty, without commas, quotes or control characters (it names \
-                 history columns)",
+                format!("{shown:?}{more}"),
+                &format!(
+                    "must be 1 to {CONTACT_NAME_MAX} characters, without commas, quotes or \
+                     control characters (it names history columns)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A `name` given to a contact or wall (default names, made of body names, may be longer).
+    fn given_name_length(&self, key: &str, name: Option<&String>) -> Result<()> {
+        if let Some(name) = name.filter(|n| n.chars().count() > CONTACT_NAME_MAX) {
+            let shown: String = name.chars().take(40).collect();
+            return Err(self.invalid(
+                format!("{key}.name"),
+                format!("{shown:?}..."),
+                &format!(
+                    "must be 1 to {CONTACT_NAME_MAX} characters, without commas, quotes or \
+                     control characters (it names history columns); this one has {}",
+                    name.chars().count()
+                ),
             ));
         }
         Ok(())
@@ -950,6 +972,7 @@ impl Validator<'_> {
                 ),
             ));
         }
+        self.given_name_length(key, c.name.as_ref())?;
         let method = self.method(&format!("{key}.method"), c.method.as_deref())?;
         let penalty_scale =
             self.penalty_scale(&format!("{key}.penalty_scale"), c.penalty_scale, method)?;
@@ -979,6 +1002,7 @@ impl Validator<'_> {
     }
 
     fn wall(&self, key: &str, w: &RawWall, bodies: &[Body]) -> Result<RigidWall> {
+        self.given_name_length(key, w.name.as_ref())?;
         for i in 0..2 {
             self.finite(&format!("{key}.point"), w.point[i])?;
             self.finite(&format!("{key}.normal"), w.normal[i])?;

@@ -928,10 +928,14 @@ impl Solver for GpuSolver {
 
     fn advance(&mut self, events: &mut Vec<Event>) -> Result<()> {
         let start = events.len();
+        let t0 = Instant::now();
         while !self.finished && events.len() == start {
             let steps = self.batch();
             self.submit(steps);
             self.read(events)?;
+            if t0.elapsed().as_secs_f64() > crate::step::ADVANCE_SECONDS {
+                break;
+            }
         }
         Ok(())
     }

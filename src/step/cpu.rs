@@ -680,9 +680,17 @@ impl Solver for CpuSolver {
     }
 
     fn advance(&mut self, events: &mut Vec<Event>) -> Result<()> {
+        // Back to the driver at the first event, or after about ADVANCE_SECONDS without one, so
+        // that progress, signals and checkpoints are seen between sparse history rows.
         let start = events.len();
+        let t0 = std::time::Instant::now();
+        let mut k = 0u32;
         while !self.done && events.len() == start {
             self.step(events);
+            k = k.wrapping_add(1);
+            if k % 16 == 0 && t0.elapsed().as_secs_f64() > super::ADVANCE_SECONDS {
+                break;
+            }
         }
         Ok(())
     }

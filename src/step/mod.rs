@@ -15,6 +15,9 @@ pub mod element;
 
 use crate::error::Result;
 
+/// Longest a [`Solver::advance`] call runs without an event before it returns (seconds).
+pub const ADVANCE_SECONDS: f64 = 0.25;
+
 /// When samples, snapshots and the end fall, as both backends decide them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Schedule {
@@ -244,7 +247,8 @@ pub trait Solver {
     /// A failed device readback.
     fn displacement_now(&mut self) -> Result<Vec<[f64; 2]>>;
 
-    /// Advances at least one step, until one or more events happened, and appends them.
+    /// Advances at least one step, until one or more events happened (or, without one, for about
+    /// [`ADVANCE_SECONDS`]), and appends them.
     ///
     /// # Errors
     /// Only for backend failures (a lost device); instability is an [`Event::Failed`].

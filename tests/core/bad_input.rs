@@ -254,6 +254,26 @@ fn spinning_rubber_disk_against_a_penalty_wall_through_its_rim_ends() {
 }
 
 #[test]
+fn contact_names_longer_than_256_characters_are_refused() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/disk_wall.toml"),
+    )
+    .unwrap();
+    let long = "w".repeat(300);
+    let named = text.replacen(
+        "[[rigid_wall]]\nname = \"wall\"",
+        &format!("[[rigid_wall]]\nname = \"{long}\""),
+        1,
+    );
+    assert_ne!(named, text);
+    expect_rejected(
+        "long_wall_name",
+        &named,
+        &["rigid_wall[0].name", "1 to 256 characters"],
+    );
+}
+
+#[test]
 fn duplicate_body_name() {
     let text = format!("{}{BODY}", valid());
     expect_rejected("duplicate_body", &text, &["body[1].name", "\"block\""]);

@@ -530,6 +530,64 @@ fn overflowing_velocity_fails_instead_of_completing_with_non_finite_energies() {
 }
 
 #[test]
+fn sigint_stops_a_run_between_sparse_history_rows_within_a_second() {
+    // The disk on a wall for 2 ms (about 10 s on the CPU) with one history row at the start and
+    // one at the end: the signal is seen between rows (the solver returns to the driver at least
+    // every 0.25 s), so the run stops soon after it, not at the end.
+    let dir = tmp_dir("outputs-signal-sparse");
+    let scene = dir.join("sparse.toml");
+    let text = std::fs::read_to_string(asset("disk_wall.toml"))
+        .unwrap()
+        .replace("history_interval = 2.0e-7", "history_interval = 2.0e-3")
+        .replace("field_interval = 2.0e-5\n", "");
+    assert!(text.contains("history_interval = 2.0e-3"));
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let child = std::process::Command::new(bin())
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--backend",
+            "cpu",
+            "--end-time",
+            "2e-3",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("start the run");
+    let start = std::time::Instant::now();
+    while !out.join("summary.json").exists() {
+        assert!(start.elapsed().as_secs() < 60, "no summary after 60 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let sent = std::time::Instant::now();
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(kill.success());
+    let o = child.wait_with_output().expect("wait");
+    let waited = sent.elapsed().as_secs_f64();
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let s = summary(&out);
+    assert_eq!(s["status"], "interrupted");
+    let t = s["end_time"].as_f64().unwrap();
+    assert!(t > 0.0 && t < 1.5e-3, "stopped at {t:e}");
+    // The process ended well before the run would have (a loaded CI machine may be slow).
+    assert!(waited < 5.0, "{waited} s after the signal");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn sigint_and_sigterm_end_a_run_with_its_summary_and_complete_history() {
     for (signal, code) in [("INT", 130), ("TERM", 143)] {
         let dir = tmp_dir(&format!("outputs-signal-{signal}"));
