@@ -688,7 +688,7 @@ impl Solver for CpuSolver {
         while !self.done && events.len() == start {
             self.step(events);
             k = k.wrapping_add(1);
-            if k % 16 == 0 && t0.elapsed().as_secs_f64() > super::ADVANCE_SECONDS {
+            if k.is_multiple_of(16) && t0.elapsed().as_secs_f64() > super::ADVANCE_SECONDS {
                 break;
             }
         }
