@@ -907,6 +907,27 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
         ricochet::run::BYTES_PER_ELEMENT,
         ricochet::run::FIELD_BYTES_PER_ELEMENT
     );
+    let r = &scene.run;
+    let mut outputs = format!(
+        "history every {:e} s (about {:.0} rows)",
+        r.history_interval,
+        (r.end_time / r.history_interval).floor() + 1.0
+    );
+    if let Some(f) = r.field_interval {
+        let format = match r.field_format {
+            ricochet::scene::FieldFormat::Binary => "binary VTU, Float32, zlib",
+            ricochet::scene::FieldFormat::Binary64 => "binary VTU, Float64, zlib",
+            ricochet::scene::FieldFormat::Ascii => "ASCII VTU",
+        };
+        outputs.push_str(&format!(
+            ", fields every {f:e} s (about {:.0} snapshots, {format})",
+            (r.end_time / f).floor() + 1.0
+        ));
+    }
+    if let Some(c) = r.checkpoint_interval {
+        outputs.push_str(&format!(", a checkpoint every {c:e} s"));
+    }
+    println!("outputs    {outputs}");
     println!("plan       {plan}");
     Ok(())
 }

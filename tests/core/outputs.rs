@@ -401,6 +401,8 @@ fn end_time_override_and_check() {
         "stable 6.97",
         "step 2.0000e-7 s",
         "element_forces -> hourglass_stiffness -> node_update -> history -> fields",
+        "history every 2e-6 s (about 101 rows), fields every 2e-5 s (about 11 snapshots, \
+         binary VTU, Float32, zlib)",
     ] {
         assert!(
             stdout.contains(needle),
