@@ -14,8 +14,20 @@ pub struct CpuSolver {
     model: Model,
     plan: Plan,
     schedule: Schedule,
-    clock: Clock,
     inv_mass: Vec<f64>,
+    /// Reference geometry of each element (constant).
+    geometry: Vec<QuadGeometry>,
+    /// Pressure loads flattened: (load, node, force per unit pressure); empty without pressure.
+    pressure: Vec<(usize, u32, [f64; 2])>,
+    /// What changes while it runs.
+    s: CpuState,
+}
+
+/// Everything of a [`CpuSolver`] that changes while it runs (the model, plan, schedule and what
+/// is derived from them are rebuilt from the scene): a checkpoint's solver part.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct CpuState {
+    clock: Clock,
     /// Displacements u_n.
     u: Vec<[f64; 2]>,
     /// Half-step velocities (v^{n-1/2} before the node stage, v^{n+1/2} after).
@@ -24,8 +36,6 @@ pub struct CpuSolver {
     v_prev: Vec<[f64; 2]>,
     /// Nodal forces f_n.
     f: Vec<[f64; 2]>,
-    /// Reference geometry of each element (constant).
-    geometry: Vec<QuadGeometry>,
     /// Dissipative element state (empty when the plan has none).
     dissipation: Vec<Dissipation>,
     /// Contact state (none without contact).
@@ -36,8 +46,6 @@ pub struct CpuSolver {
     hourglass_work: f64,
     bulk_work: f64,
     external_work: f64,
-    /// Pressure loads flattened: (load, node, force per unit pressure); empty without pressure.
-    pressure: Vec<(usize, u32, [f64; 2])>,
     /// The pressure impulse of the step on each entry of `pressure`, and v^{n-1/2} there.
     pressure_impulse: Vec<[f64; 2]>,
     pressure_v_old: Vec<[f64; 2]>,
@@ -47,37 +55,6 @@ pub struct CpuSolver {
     /// v^{n-1/2} of each node on damped steps (empty without damping).
     damping_v_old: Vec<[f64; 2]>,
     /// Work of the damping impulses so far (<= 0), and the part of the last step's after t_n.
-    damping_work: f64,
-    damping_after: f64,
-    t: f64,
-    n: u64,
-    dt_prev: f64,
-    dt_first: f64,
-    dt_range: (f64, f64),
-    done: bool,
-}
-
-/// Everything of a [`CpuSolver`] that changes while it runs (the model, plan, schedule and what
-/// is derived from them are rebuilt from the scene): a checkpoint's solver part.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct CpuState {
-    clock: Clock,
-    u: Vec<[f64; 2]>,
-    v: Vec<[f64; 2]>,
-    v_prev: Vec<[f64; 2]>,
-    f: Vec<[f64; 2]>,
-    dissipation: Vec<Dissipation>,
-    contact: Option<ContactSet>,
-    contact_work: f64,
-    contact_after: f64,
-    hourglass_work: f64,
-    bulk_work: f64,
-    external_work: f64,
-    pressure_impulse: Vec<[f64; 2]>,
-    pressure_v_old: Vec<[f64; 2]>,
-    pressure_work: f64,
-    pressure_after: f64,
-    damping_v_old: Vec<[f64; 2]>,
     damping_work: f64,
     damping_after: f64,
     t: f64,
@@ -121,38 +98,41 @@ impl CpuSolver {
         } else {
             Vec::new()
         };
-        Self {
-            pressure_impulse: vec![[0.0; 2]; pressure.len()],
-            pressure_v_old: vec![[0.0; 2]; pressure.len()],
-            pressure,
-            pressure_work: 0.0,
-            pressure_after: 0.0,
-            damping_v_old,
-            damping_work: 0.0,
-            damping_after: 0.0,
-            contact: ContactSet::new(&model),
-            contact_work: 0.0,
-            contact_after: 0.0,
-            geometry: model.corners.iter().map(quad_geometry).collect(),
-            inv_mass: model.mass.iter().map(|m| 1.0 / m).collect(),
+        let s = CpuState {
+            clock: Clock::new(),
             u: vec![[0.0; 2]; nn],
             v: model.velocity.clone(),
             v_prev: vec![[0.0; 2]; nn],
             f: vec![[0.0; 2]; nn],
             dissipation,
-            model,
-            plan,
-            schedule,
-            clock: Clock::new(),
+            contact: ContactSet::new(&model),
+            contact_work: 0.0,
+            contact_after: 0.0,
             hourglass_work: 0.0,
             bulk_work: 0.0,
             external_work: 0.0,
+            pressure_impulse: vec![[0.0; 2]; pressure.len()],
+            pressure_v_old: vec![[0.0; 2]; pressure.len()],
+            pressure_work: 0.0,
+            pressure_after: 0.0,
+            damping_v_old,
+            damping_work: 0.0,
+            damping_after: 0.0,
             t: 0.0,
             n: 0,
             dt_prev: 0.0,
             dt_first: 0.0,
             dt_range: (f64::INFINITY, 0.0),
             done: false,
+        };
+        Self {
+            geometry: model.corners.iter().map(quad_geometry).collect(),
+            inv_mass: model.mass.iter().map(|m| 1.0 / m).collect(),
+            pressure,
+            model,
+            plan,
+            schedule,
+            s,
         }
     }
 
@@ -161,34 +141,7 @@ impl CpuSolver {
     /// # Errors
     /// [`crate::Error::Checkpoint`] if it cannot be encoded.
     pub fn save_state(&self) -> Result<Vec<u8>> {
-        let state = CpuState {
-            clock: self.clock,
-            u: self.u.clone(),
-            v: self.v.clone(),
-            v_prev: self.v_prev.clone(),
-            f: self.f.clone(),
-            dissipation: self.dissipation.clone(),
-            contact: self.contact.clone(),
-            contact_work: self.contact_work,
-            contact_after: self.contact_after,
-            hourglass_work: self.hourglass_work,
-            bulk_work: self.bulk_work,
-            external_work: self.external_work,
-            pressure_impulse: self.pressure_impulse.clone(),
-            pressure_v_old: self.pressure_v_old.clone(),
-            pressure_work: self.pressure_work,
-            pressure_after: self.pressure_after,
-            damping_v_old: self.damping_v_old.clone(),
-            damping_work: self.damping_work,
-            damping_after: self.damping_after,
-            t: self.t,
-            n: self.n,
-            dt_prev: self.dt_prev,
-            dt_first: self.dt_first,
-            dt_range: self.dt_range,
-            done: self.done,
-        };
-        postcard::to_stdvec(&state)
+        postcard::to_stdvec(&self.s)
             .map_err(|e| crate::Error::Checkpoint(format!("encoding the CPU state: {e}")))
     }
 
@@ -204,42 +157,18 @@ impl CpuSolver {
             && s.v.len() == nn
             && s.v_prev.len() == nn
             && s.f.len() == nn
-            && s.dissipation.len() == self.dissipation.len()
+            && s.dissipation.len() == self.s.dissipation.len()
             && s.pressure_impulse.len() == self.pressure.len()
             && s.pressure_v_old.len() == self.pressure.len()
-            && s.damping_v_old.len() == self.damping_v_old.len()
-            && s.contact.is_some() == self.contact.is_some()
-            && (self.dissipation.is_empty() || self.dissipation.len() == ne);
+            && s.damping_v_old.len() == self.s.damping_v_old.len()
+            && s.contact.is_some() == self.s.contact.is_some()
+            && (self.s.dissipation.is_empty() || self.s.dissipation.len() == ne);
         if !fits {
             return Err(crate::Error::Checkpoint(
                 "the saved CPU state does not fit this scene's model (another mesh or plan)".into(),
             ));
         }
-        self.clock = s.clock;
-        self.u = s.u;
-        self.v = s.v;
-        self.v_prev = s.v_prev;
-        self.f = s.f;
-        self.dissipation = s.dissipation;
-        self.contact = s.contact;
-        self.contact_work = s.contact_work;
-        self.contact_after = s.contact_after;
-        self.hourglass_work = s.hourglass_work;
-        self.bulk_work = s.bulk_work;
-        self.external_work = s.external_work;
-        self.pressure_impulse = s.pressure_impulse;
-        self.pressure_v_old = s.pressure_v_old;
-        self.pressure_work = s.pressure_work;
-        self.pressure_after = s.pressure_after;
-        self.damping_v_old = s.damping_v_old;
-        self.damping_work = s.damping_work;
-        self.damping_after = s.damping_after;
-        self.t = s.t;
-        self.n = s.n;
-        self.dt_prev = s.dt_prev;
-        self.dt_first = s.dt_first;
-        self.dt_range = s.dt_range;
-        self.done = s.done;
+        self.s = s;
         Ok(())
     }
 
@@ -250,24 +179,24 @@ impl CpuSolver {
 
     /// Displacements u_n.
     pub fn displacement(&self) -> &[[f64; 2]] {
-        &self.u
+        &self.s.u
     }
 
     /// Current half-step velocities.
     pub fn velocity(&self) -> &[[f64; 2]] {
-        &self.v
+        &self.s.v
     }
 
     /// The contact state, if the model has contact.
     pub fn contact(&self) -> Option<&ContactSet> {
-        self.contact.as_ref()
+        self.s.contact.as_ref()
     }
 
     /// Takes `n` steps, discarding outputs (for benchmarks).
     pub fn run_steps(&mut self, n: u64) {
         let mut events = Vec::new();
         for _ in 0..n {
-            if self.done {
+            if self.s.done {
                 break;
             }
             self.step(&mut events);
@@ -298,7 +227,10 @@ impl CpuSolver {
     #[inline(always)] // not inlined otherwise (stack spills in `step`; +18 % throughput measured)
     fn gather(&self, e: usize) -> ([[f64; 2]; 4], [[f64; 2]; 4]) {
         let q = self.model.quads[e];
-        (q.map(|i| self.u[i as usize]), q.map(|i| self.v[i as usize]))
+        (
+            q.map(|i| self.s.u[i as usize]),
+            q.map(|i| self.s.v[i as usize]),
+        )
     }
 
     fn element_name(&self, e: usize) -> String {
@@ -322,16 +254,16 @@ impl CpuSolver {
     }
 
     fn fail(&mut self, events: &mut Vec<Event>, message: String) {
-        self.done = true;
+        self.s.done = true;
         events.push(Event::Failed(Failure {
-            step: self.n,
-            time: self.t,
+            step: self.s.n,
+            time: self.s.t,
             message,
         }));
     }
 
     fn element_stage(&mut self, need_energy: bool) -> std::result::Result<ElementStage, String> {
-        for f in &mut self.f {
+        for f in &mut self.s.f {
             *f = [0.0; 2];
         }
         let mut st = ElementStage {
@@ -340,12 +272,12 @@ impl CpuSolver {
             strain: 0.0,
             hourglass_stored: 0.0,
         };
-        let keep = !self.dissipation.is_empty();
+        let keep = !self.s.dissipation.is_empty();
         for e in 0..self.model.element_count() {
             let q = self.model.quads[e];
             let (ue, ve) = self.gather(e);
             let prev = if keep {
-                self.dissipation[e]
+                self.s.dissipation[e]
             } else {
                 Dissipation::default()
             };
@@ -356,7 +288,7 @@ impl CpuSolver {
                 &ue,
                 &ve,
                 &prev,
-                self.dt_prev,
+                self.s.dt_prev,
             );
             if out.min_corner.is_nan() || out.min_corner <= 0.0 {
                 return Err(format!(
@@ -368,17 +300,17 @@ impl CpuSolver {
             }
             for a in 0..4 {
                 let n = q[a] as usize;
-                self.f[n][0] += out.force[a][0];
-                self.f[n][1] += out.force[a][1];
+                self.s.f[n][0] += out.force[a][0];
+                self.s.f[n][1] += out.force[a][1];
             }
             if out.dt < st.dt_min {
                 st.dt_min = out.dt;
                 st.dt_element = e;
             }
             if keep {
-                self.hourglass_work += out.hourglass_work;
-                self.bulk_work += out.bulk_work;
-                self.dissipation[e] = Dissipation {
+                self.s.hourglass_work += out.hourglass_work;
+                self.s.bulk_work += out.bulk_work;
+                self.s.dissipation[e] = Dissipation {
                     hourglass_q: out.hourglass_q,
                     bulk_p: out.bulk_p,
                 };
@@ -390,21 +322,21 @@ impl CpuSolver {
         }
         // Pressure loads: consistent nodal forces of the pressure at t_n.
         for (k, &(load, node, per_pa)) in self.pressure.iter().enumerate() {
-            let p = self.model.pressures[load].at(self.t);
+            let p = self.model.pressures[load].at(self.s.t);
             let f = [p * per_pa[0], p * per_pa[1]];
-            self.f[node as usize][0] += f[0];
-            self.f[node as usize][1] += f[1];
+            self.s.f[node as usize][0] += f[0];
+            self.s.f[node as usize][1] += f[1];
             // Kept as the force until the node stage turns it into the step's impulse.
-            self.pressure_impulse[k] = f;
+            self.s.pressure_impulse[k] = f;
         }
         Ok(st)
     }
 
     fn step(&mut self, events: &mut Vec<Event>) {
         let s = self.schedule;
-        let sample_due = self.clock.sample_due(&s, self.t, self.dt_prev);
-        let snapshot_due = self.clock.snapshot_due(&s, self.t, self.dt_prev);
-        let at_end = Clock::at_end(&s, self.t, self.dt_prev);
+        let sample_due = self.s.clock.sample_due(&s, self.s.t, self.s.dt_prev);
+        let snapshot_due = self.s.clock.snapshot_due(&s, self.s.t, self.s.dt_prev);
+        let at_end = Clock::at_end(&s, self.s.t, self.s.dt_prev);
 
         // 1. Element stage.
         let st = match self.element_stage(sample_due) {
@@ -420,14 +352,14 @@ impl CpuSolver {
             return self.fail(events, msg);
         }
         // 2. The step dt^{n+1/2} (penalty springs shorten it).
-        let dt_stable = match &self.contact {
+        let dt_stable = match &self.s.contact {
             Some(c) => c.limit_step(st.dt_min),
             None => st.dt_min,
         };
         let dt_next = match s.time_step {
             Some(fixed) => {
                 if fixed > dt_stable {
-                    let by = match self.contact.as_ref().and_then(|c| c.penalty_step()) {
+                    let by = match self.s.contact.as_ref().and_then(|c| c.penalty_step()) {
                         Some((_, what)) => format!(" and the penalty springs of {what}"),
                         None => String::new(),
                     };
@@ -441,38 +373,41 @@ impl CpuSolver {
             }
             None => s.time_step_scale * dt_stable,
         };
-        if self.n == 0 {
-            self.dt_first = dt_next;
-        } else if dt_next < 1e-6 * self.dt_first {
+        if self.s.n == 0 {
+            self.s.dt_first = dt_next;
+        } else if dt_next < 1e-6 * self.s.dt_first {
             let msg = format!(
                 "the stable step collapsed to {dt_next:e} (first step {:e}) at {}",
-                self.dt_first,
+                self.s.dt_first,
                 self.element_name(st.dt_element)
             );
             return self.fail(events, msg);
         }
-        let dt_next = super::clip_to_end(dt_next, s.end_time - self.t, s.end_time, at_end);
-        self.dt_range = (self.dt_range.0.min(dt_next), self.dt_range.1.max(dt_next));
+        let dt_next = super::clip_to_end(dt_next, s.end_time - self.s.t, s.end_time, at_end);
+        self.s.dt_range = (
+            self.s.dt_range.0.min(dt_next),
+            self.s.dt_range.1.max(dt_next),
+        );
         // 3. Node stage.
-        let dt_n = if self.n == 0 {
+        let dt_n = if self.s.n == 0 {
             0.5 * dt_next
         } else {
-            0.5 * (self.dt_prev + dt_next)
+            0.5 * (self.s.dt_prev + dt_next)
         };
         let output = sample_due || snapshot_due;
         if output {
-            self.v_prev.copy_from_slice(&self.v);
+            self.s.v_prev.copy_from_slice(&self.s.v);
         }
-        if let Some(c) = self.contact.as_mut() {
-            c.keep_old_velocity(&self.v);
+        if let Some(c) = self.s.contact.as_mut() {
+            c.keep_old_velocity(&self.s.v);
         }
         // The pressure impulses of the step: dt_n F_n (dt^{1/2} F_0 on the first step, where the
         // conserved form uses v^{-1/2} = 2 v_0 - v^{1/2}; see the output below), and v^{n-1/2}.
-        let load_dt = if self.n == 0 { dt_next } else { dt_n };
+        let load_dt = if self.s.n == 0 { dt_next } else { dt_n };
         for (k, &(_, node, _)) in self.pressure.iter().enumerate() {
-            let j = &mut self.pressure_impulse[k];
+            let j = &mut self.s.pressure_impulse[k];
             *j = [load_dt * j[0], load_dt * j[1]];
-            self.pressure_v_old[k] = self.v[node as usize];
+            self.s.pressure_v_old[k] = self.s.v[node as usize];
         }
         let mut bad = None;
         // Mass damping (from the second step on: the first half step stays undamped so that the
@@ -481,7 +416,7 @@ impl CpuSolver {
         // (1 + c) m v+ = (1 - c) m v- + dt_n f + J (c = alpha dt_n / 2, J the boundary and contact
         // impulses), stable for any alpha >= 0. The constraints below therefore see the masses
         // (1 + c) m; the damping impulse -c m (v- + v+) and its work are summed at the end.
-        let damped = !self.damping_v_old.is_empty() && self.n > 0;
+        let damped = !self.s.damping_v_old.is_empty() && self.s.n > 0;
         let damp_c = if damped {
             0.5 * self.model.mass_damping * dt_n
         } else {
@@ -490,22 +425,22 @@ impl CpuSolver {
         let mass_scale = 1.0 + damp_c;
         if damped {
             let (keep, scale) = ((1.0 - damp_c) / mass_scale, 1.0 / mass_scale);
-            for i in 0..self.v.len() {
+            for i in 0..self.s.v.len() {
                 let w = scale * dt_n * self.inv_mass[i];
-                let v = &mut self.v[i];
-                self.damping_v_old[i] = *v;
-                v[0] = keep * v[0] + w * self.f[i][0];
-                v[1] = keep * v[1] + w * self.f[i][1];
+                let v = &mut self.s.v[i];
+                self.s.damping_v_old[i] = *v;
+                v[0] = keep * v[0] + w * self.s.f[i][0];
+                v[1] = keep * v[1] + w * self.s.f[i][1];
                 if bad.is_none() && !(v[0].is_finite() && v[1].is_finite()) {
                     bad = Some(i);
                 }
             }
         } else {
-            for i in 0..self.v.len() {
+            for i in 0..self.s.v.len() {
                 let w = dt_n * self.inv_mass[i];
-                let v = &mut self.v[i];
-                v[0] += w * self.f[i][0];
-                v[1] += w * self.f[i][1];
+                let v = &mut self.s.v[i];
+                v[0] += w * self.s.f[i][0];
+                v[1] += w * self.s.f[i][1];
                 if bad.is_none() && !(v[0].is_finite() && v[1].is_finite()) {
                     bad = Some(i);
                 }
@@ -515,7 +450,7 @@ impl CpuSolver {
             let msg = format!(
                 "velocity of {} is not finite (force {:?}): the run went unstable",
                 self.node_name(i),
-                self.f[i]
+                self.s.f[i]
             );
             return self.fail(events, msg);
         }
@@ -529,34 +464,41 @@ impl CpuSolver {
                 let m = mass_scale * self.model.mass[i];
                 for (k, val) in [(0, c.vx), (1, c.vy)] {
                     if let Some(val) = val {
-                        step_work += m * (val - self.v[i][k]) * val;
-                        self.v[i][k] = val;
+                        step_work += m * (val - self.s.v[i][k]) * val;
+                        self.s.v[i][k] = val;
                     }
                 }
             }
-            self.external_work += step_work;
+            self.s.external_work += step_work;
         }
-        if output && self.n == 0 {
+        if output && self.s.n == 0 {
             // v^{-1/2} = v_0 - dt_0 a_0 = 2 v_0 - v^{1/2} (of the uncoupled update: the contact
             // impulse of step 0 then enters M (v^{1/2} - v^{-1/2}) = dt f_0 + J_0 like any other).
-            for (p, v) in self.v_prev.iter_mut().zip(&self.v) {
+            for (p, v) in self.s.v_prev.iter_mut().zip(&self.s.v) {
                 *p = [2.0 * p[0] - v[0], 2.0 * p[1] - v[1]];
             }
         }
-        if self.n == 0 {
+        if self.s.n == 0 {
             for (k, &(_, node, _)) in self.pressure.iter().enumerate() {
-                let (o, v) = (&mut self.pressure_v_old[k], self.v[node as usize]);
+                let (o, v) = (&mut self.s.pressure_v_old[k], self.s.v[node as usize]);
                 *o = [2.0 * o[0] - v[0], 2.0 * o[1] - v[1]];
             }
         }
         // CONTACT: correct the penetrating nodes of the uncoupled update.
-        if let Some(c) = self.contact.as_mut() {
-            if self.n == 0 {
-                c.first_step_old_velocity(&self.v);
+        if let Some(c) = self.s.contact.as_mut() {
+            if self.s.n == 0 {
+                c.first_step_old_velocity(&self.s.v);
             }
-            let w = c.apply(&self.model, &self.u, &mut self.v, dt_next, dt_n, mass_scale);
-            self.contact_work += w.work;
-            self.contact_after = w.after;
+            let w = c.apply(
+                &self.model,
+                &self.s.u,
+                &mut self.s.v,
+                dt_next,
+                dt_n,
+                mass_scale,
+            );
+            self.s.contact_work += w.work;
+            self.s.contact_after = w.after;
         }
         // Work of the pressure and damping impulses, J (v^{n-1/2} + v^{n+1/2}) / 2 with the final
         // v^{n+1/2} (boundaries and contact applied), half of it after t_n.
@@ -564,45 +506,52 @@ impl CpuSolver {
             let (mut before, mut after) = (0.0, 0.0);
             for (k, &(_, node, _)) in self.pressure.iter().enumerate() {
                 let (j, o, v) = (
-                    self.pressure_impulse[k],
-                    self.pressure_v_old[k],
-                    self.v[node as usize],
+                    self.s.pressure_impulse[k],
+                    self.s.pressure_v_old[k],
+                    self.s.v[node as usize],
                 );
                 before += 0.5 * (j[0] * o[0] + j[1] * o[1]);
                 after += 0.5 * (j[0] * v[0] + j[1] * v[1]);
             }
-            self.pressure_work += before + after;
-            self.pressure_after = after;
+            self.s.pressure_work += before + after;
+            self.s.pressure_after = after;
         }
         if damped {
             let (mut before, mut after) = (0.0, 0.0);
-            for ((o, v), m) in self.damping_v_old.iter().zip(&self.v).zip(&self.model.mass) {
+            for ((o, v), m) in self
+                .s
+                .damping_v_old
+                .iter()
+                .zip(&self.s.v)
+                .zip(&self.model.mass)
+            {
                 let j = [-damp_c * m * (o[0] + v[0]), -damp_c * m * (o[1] + v[1])];
                 before += 0.5 * (j[0] * o[0] + j[1] * o[1]);
                 after += 0.5 * (j[0] * v[0] + j[1] * v[1]);
             }
-            self.damping_work += before + after;
-            self.damping_after = after;
+            self.s.damping_work += before + after;
+            self.s.damping_after = after;
         }
         // 4. Output at t_n.
         if snapshot_due {
             events.push(Event::Snapshot(Snapshot {
-                time: self.t,
-                step: self.n,
-                displacement: self.u.clone(),
+                time: self.s.t,
+                step: self.s.n,
+                displacement: self.s.u.clone(),
                 velocity: self
+                    .s
                     .v_prev
                     .iter()
-                    .zip(&self.v)
+                    .zip(&self.s.v)
                     .map(|(a, b)| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])])
                     .collect(),
             }));
-            self.clock.took_snapshot(&s, self.t, self.dt_prev);
+            self.s.clock.took_snapshot(&s, self.s.t, self.s.dt_prev);
         }
         if sample_due {
             let mut kinetic = 0.0;
-            for i in 0..self.v.len() {
-                let (a, b) = (self.v_prev[i], self.v[i]);
+            for i in 0..self.s.v.len() {
+                let (a, b) = (self.s.v_prev[i], self.s.v[i]);
                 kinetic += 0.5 * self.model.mass[i] * (a[0] * b[0] + a[1] * b[1]);
             }
             let body_velocity = self
@@ -613,45 +562,46 @@ impl CpuSolver {
                     let mut p = [0.0; 2];
                     for i in b.nodes.clone() {
                         let m = self.model.mass[i];
-                        p[0] += m * 0.5 * (self.v_prev[i][0] + self.v[i][0]);
-                        p[1] += m * 0.5 * (self.v_prev[i][1] + self.v[i][1]);
+                        p[0] += m * 0.5 * (self.s.v_prev[i][0] + self.s.v[i][0]);
+                        p[1] += m * 0.5 * (self.s.v_prev[i][1] + self.s.v[i][1]);
                     }
                     [p[0] / b.mass, p[1] / b.mass]
                 })
                 .collect();
             events.push(Event::Sample(Sample {
-                time: self.t,
-                step: self.n,
+                time: self.s.t,
+                step: self.s.n,
                 dt: dt_next,
                 kinetic,
                 internal: st.strain,
-                hourglass: st.hourglass_stored + self.hourglass_work,
-                viscous: self.bulk_work - (self.damping_work - self.damping_after),
-                external: self.external_work - 0.5 * step_work
-                    + (self.pressure_work - self.pressure_after),
-                contact: -(self.contact_work - self.contact_after),
+                hourglass: st.hourglass_stored + self.s.hourglass_work,
+                viscous: self.s.bulk_work - (self.s.damping_work - self.s.damping_after),
+                external: self.s.external_work - 0.5 * step_work
+                    + (self.s.pressure_work - self.s.pressure_after),
+                contact: -(self.s.contact_work - self.s.contact_after),
                 contacts: self
+                    .s
                     .contact
                     .as_mut()
                     .map(|c| c.sample())
                     .unwrap_or_default(),
                 body_velocity,
             }));
-            self.clock.took_sample(&s, self.t, self.dt_prev);
+            self.s.clock.took_sample(&s, self.s.t, self.s.dt_prev);
         }
         if at_end {
-            self.done = true;
+            self.s.done = true;
             events.push(Event::Done);
             return;
         }
         // 5. Displacement update.
-        for (u, v) in self.u.iter_mut().zip(&self.v) {
+        for (u, v) in self.s.u.iter_mut().zip(&self.s.v) {
             u[0] += dt_next * v[0];
             u[1] += dt_next * v[1];
         }
-        self.t += dt_next;
-        self.dt_prev = dt_next;
-        self.n += 1;
+        self.s.t += dt_next;
+        self.s.dt_prev = dt_next;
+        self.s.n += 1;
     }
 }
 
@@ -666,12 +616,13 @@ impl Solver for CpuSolver {
 
     fn counters(&self) -> crate::step::Counters {
         let s = self
+            .s
             .contact
             .as_ref()
             .map(|c| c.sweep_stats())
             .unwrap_or_default();
         crate::step::Counters {
-            contact_searches: self.contact.as_ref().map_or(0, |c| c.searches()),
+            contact_searches: self.s.contact.as_ref().map_or(0, |c| c.searches()),
             contact_sweeps_mean: s.mean(),
             contact_sweeps_max: s.max,
             contact_unconverged: s.unconverged,
@@ -685,7 +636,7 @@ impl Solver for CpuSolver {
         let start = events.len();
         let t0 = std::time::Instant::now();
         let mut k = 0u32;
-        while !self.done && events.len() == start {
+        while !self.s.done && events.len() == start {
             self.step(events);
             k = k.wrapping_add(1);
             if k.is_multiple_of(16) && t0.elapsed().as_secs_f64() > super::ADVANCE_SECONDS {
@@ -696,15 +647,15 @@ impl Solver for CpuSolver {
     }
 
     fn steps(&self) -> u64 {
-        self.n
+        self.s.n
     }
 
     fn time(&self) -> f64 {
-        self.t
+        self.s.t
     }
 
     fn dt_range(&self) -> (f64, f64) {
-        self.dt_range
+        self.s.dt_range
     }
 
     fn backend(&self) -> &'static str {
