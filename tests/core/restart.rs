@@ -5,8 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use ricochet::checkpoint::{Checkpoint, Checkpointing};
-use ricochet::run::{run_with, RunOptions};
+use ricochet::checkpoint::Checkpoint;
 use ricochet::scene::Scene;
 use ricochet::step::cpu::CpuSolver;
 
@@ -14,7 +13,7 @@ use crate::common::*;
 
 #[path = "../shared/restart.rs"]
 mod shared_restart;
-use shared_restart::{assert_same_outputs, copy_dir, summary};
+use shared_restart::{assert_same_outputs, copy_dir, run_interrupted_halfway, summary};
 
 fn asset(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -88,32 +87,11 @@ fn interrupted_run_restarts_to_the_same_outputs() {
             ricochet::run::schedule(&scene_v),
         );
         let b = base.join(format!("{scene}-b"));
-        let half = scene_v.run.end_time / 2.0;
-        let mut stop = |t: f64, _end: f64, _n: u64| (t > half).then(|| "stopped".to_string());
-        let options = RunOptions {
-            checkpointing: Some(Checkpointing {
-                // Longer than the run: the only checkpoint is the interruption's.
-                interval: 10.0,
-                scene_path: path.clone(),
-                scene_text: text.clone(),
-                end_time_override: None,
-            }),
-            resume: None,
-        };
-        let r = run_with(
-            &scene_v,
-            &model,
-            &plan,
-            &mut solver,
-            &b,
-            Some(&mut stop),
-            options,
-        )
-        .unwrap();
-        assert_eq!(r.summary.status, "interrupted");
+        let r =
+            run_interrupted_halfway(&scene_v, &model, &plan, &mut solver, &b, &path, &text, None);
         let c = Checkpoint::read(&b).expect("checkpoint at the interruption");
         assert_eq!(c.steps, r.summary.steps);
-        assert!(c.time > half && c.time < scene_v.run.end_time);
+        assert!(c.time > scene_v.run.end_time / 2.0 && c.time < scene_v.run.end_time);
 
         let o = restart_cpu(&b);
         assert_eq!(o.status.code(), Some(0), "{o:?}");

@@ -8,12 +8,11 @@ use super::*;
 use std::path::PathBuf;
 use std::process::Command;
 
-use ricochet::checkpoint::{Checkpoint, Checkpointing};
-use ricochet::run::{run_with, RunOptions};
+use ricochet::checkpoint::Checkpoint;
 
 #[path = "../shared/restart.rs"]
 mod shared_restart;
-use shared_restart::{assert_same_outputs, copy_dir, summary};
+use shared_restart::{assert_same_outputs, copy_dir, run_interrupted_halfway, summary};
 
 fn asset(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -90,28 +89,16 @@ fn gpu_restart_after_a_crash_and_an_interruption_gives_the_same_outputs() {
         let mut solver =
             GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene_v)).expect("gpu solver");
         let d = base.join(format!("{scene}-d"));
-        let half = end_t / 2.0;
-        let mut stop = |t: f64, _end: f64, _n: u64| (t > half).then(|| "stopped".to_string());
-        let options = RunOptions {
-            checkpointing: Some(Checkpointing {
-                interval: 10.0,
-                scene_path: path.clone(),
-                scene_text: text.clone(),
-                end_time_override: Some(end_t),
-            }),
-            resume: None,
-        };
-        let r = run_with(
+        let r = run_interrupted_halfway(
             &scene_v,
             &model,
             &plan,
             &mut solver,
             &d,
-            Some(&mut stop),
-            options,
-        )
-        .unwrap();
-        assert_eq!(r.summary.status, "interrupted");
+            &path,
+            &text,
+            Some(end_t),
+        );
         let o = ricochet(&["run", "--restart", d.to_str().unwrap()]);
         assert_eq!(o.status.code(), Some(0), "{o:?}");
         assert_same_outputs(&a, &d);

@@ -4,6 +4,13 @@
 
 use std::path::Path;
 
+use ricochet::checkpoint::Checkpointing;
+use ricochet::model::Model;
+use ricochet::plan::Plan;
+use ricochet::run::{run_with, RunOptions, RunResult};
+use ricochet::scene::Scene;
+use ricochet::step::Solver;
+
 /// Copies the folder `from` (files and subfolders) to `to`.
 pub fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).expect("create the copy");
@@ -61,4 +68,36 @@ pub fn assert_same_outputs(a: &Path, b: &Path) -> usize {
 pub fn summary(dir: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
     serde_json::from_str(&text).expect("summary.json is JSON")
+}
+
+/// Runs `scene` (from the file `path` with text `text`, and `--end-time` `end_override`) with
+/// `solver` into `out`, interrupted (as by a signal, through the progress callback) once it passes
+/// half its end time; checkpoints are on with an interval longer than the run, so the only
+/// checkpoint is the interruption's.
+#[allow(clippy::too_many_arguments)]
+pub fn run_interrupted_halfway(
+    scene: &Scene,
+    model: &Model,
+    plan: &Plan,
+    solver: &mut dyn Solver,
+    out: &Path,
+    path: &Path,
+    text: &str,
+    end_override: Option<f64>,
+) -> RunResult {
+    let half = scene.run.end_time / 2.0;
+    let mut stop = |t: f64, _end: f64, _n: u64| (t > half).then(|| "stopped".to_string());
+    let options = RunOptions {
+        checkpointing: Some(Checkpointing {
+            interval: 10.0,
+            scene_path: path.to_path_buf(),
+            scene_text: text.to_string(),
+            end_time_override: end_override,
+        }),
+        resume: None,
+    };
+    let r = run_with(scene, model, plan, solver, out, Some(&mut stop), options)
+        .expect("the interrupted run");
+    assert_eq!(r.summary.status, "interrupted");
+    r
 }
