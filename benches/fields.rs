@@ -33,6 +33,7 @@ fn write(c: &mut Criterion) {
             step: 0,
             displacement,
             velocity,
+            plastic: Vec::new(),
         };
         for (name, format) in [
             ("ascii", FieldFormat::Ascii),

@@ -567,6 +567,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             };
             let mut solver: Box<dyn Solver> = match backend {
                 Backend::Cpu => cpu(),
+                Backend::Auto if model.has_plasticity() => {
+                    eprintln!(
+                        "notice: the scene has a \"j2_plastic\" material, which only the CPU \
+                         backend runs so far: running on the CPU reference"
+                    );
+                    cpu()
+                }
                 Backend::Auto => match GpuContext::new(adapter.as_deref()) {
                     Ok(ctx) if ctx.is_software() && !adapter_named(adapter.as_deref()) => {
                         eprintln!(
@@ -819,6 +826,12 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             b.params.dilatational_speed(),
             b.params.hourglass
         );
+        if b.params.model == ricochet::scene::MaterialModel::J2Plastic {
+            println!(
+                "           J2 plastic: yield stress {:e} Pa, hardening modulus {:e} Pa (CPU backend only)",
+                b.params.yield_stress, b.params.hardening
+            );
+        }
     }
     println!(
         "time step  stable {dt:.4e} s (element {e}); step {step:.4e} s; about {steps} steps to {:e} s",

@@ -343,6 +343,14 @@ impl Model {
     pub fn params(&self, e: usize) -> &ElementParams {
         &self.bodies[self.element_body[e] as usize].params
     }
+
+    /// Whether a body is of a J2 plastic material (the solvers then keep a plastic state per
+    /// element).
+    pub fn has_plasticity(&self) -> bool {
+        self.bodies
+            .iter()
+            .any(|b| b.params.model == crate::scene::MaterialModel::J2Plastic)
+    }
 }
 
 /// Row-sum lumped masses of a bilinear quad: `rho_t * integral of N_a`, by 2x2 Gauss quadrature.

@@ -10,6 +10,9 @@ use crate::scene::{HourglassForm, Scene};
 pub enum Stage {
     /// Stress, nodal forces and stable step of every element.
     ElementForces,
+    /// J2 plastic return and plastic work of the elements of plastic bodies (per-element plastic
+    /// state kept between steps).
+    Plasticity,
     /// Viscous hourglass forces (bodies with the viscous form).
     HourglassViscous,
     /// Stiffness hourglass forces (bodies with the stiffness form).
@@ -39,6 +42,7 @@ impl Stage {
     pub fn name(self) -> &'static str {
         match self {
             Stage::ElementForces => "element_forces",
+            Stage::Plasticity => "plasticity",
             Stage::HourglassViscous => "hourglass_viscous",
             Stage::HourglassStiffness => "hourglass_stiffness",
             Stage::BulkViscosity => "bulk_viscosity",
@@ -92,6 +96,9 @@ impl Plan {
         let viscous = count(HourglassForm::Viscous);
         let stiffness = count(HourglassForm::Stiffness);
         let mut stages = vec![Stage::ElementForces];
+        if model.has_plasticity() {
+            stages.push(Stage::Plasticity);
+        }
         if viscous > 0 {
             stages.push(Stage::HourglassViscous);
         }

@@ -26,6 +26,9 @@ pub const BYTES_PER_ELEMENT: u64 = 450;
 /// Further memory per element when fields are written (the VTU text of a snapshot and its element
 /// fields; the same run with fields peaked at 903 MB).
 pub const FIELD_BYTES_PER_ELEMENT: u64 = 460;
+/// Further memory per element of a J2 plastic body: its plastic state (5 f64) and the copy a
+/// snapshot takes.
+pub const PLASTIC_BYTES_PER_ELEMENT: u64 = 80;
 
 /// Elements of each body as its mesh specification gives them, without meshing.
 pub fn element_counts(scene: &Scene) -> Vec<u64> {
@@ -51,10 +54,19 @@ pub fn memory_estimate(scene: &Scene) -> u64 {
         } else {
             0
         };
+    let plastic: u64 = element_counts(scene)
+        .iter()
+        .zip(&scene.bodies)
+        .filter(|(_, b)| {
+            scene.materials[b.material].model == crate::scene::MaterialModel::J2Plastic
+        })
+        .map(|(n, _)| n.saturating_mul(PLASTIC_BYTES_PER_ELEMENT))
+        .sum();
     element_counts(scene)
         .iter()
         .sum::<u64>()
         .saturating_mul(per)
+        .saturating_add(plastic)
 }
 
 /// The memory this machine has available (`MemAvailable` of `/proc/meminfo`), if known.
@@ -396,7 +408,7 @@ pub fn run_with(
     let mut rows_before = 0usize;
     let (mut history, mut fields) = match &options.resume {
         None => (
-            HistoryWriter::create(&history_path, &bodies, &contacts)?,
+            HistoryWriter::create(&history_path, &bodies, &contacts, model.has_plasticity())?,
             match scene.run.field_interval {
                 Some(_) => Some(FieldWriter::new(out_dir, format)?),
                 None => None,
@@ -415,7 +427,12 @@ pub fn run_with(
             loop_seconds = c.loop_seconds;
             rows_before = c.history_rows as usize;
             (
-                HistoryWriter::resume(&history_path, c.history_bytes, c.history_rows)?,
+                HistoryWriter::resume(
+                    &history_path,
+                    c.history_bytes,
+                    c.history_rows,
+                    model.has_plasticity(),
+                )?,
                 match scene.run.field_interval {
                     Some(_) => Some(FieldWriter::resume(
                         out_dir,

@@ -183,6 +183,9 @@ struct RawMaterial {
     density: f64,
     youngs_modulus: f64,
     poisson_ratio: f64,
+    yield_stress: Option<f64>,
+    hardening_modulus: Option<f64>,
+    johnson_cook: Option<toml::Value>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -283,6 +286,19 @@ pub enum MaterialModel {
     LinearElastic,
     /// Compressible neo-Hookean hyperelasticity (finite strain, objective).
     NeoHookean,
+    /// J2 (von Mises) plasticity with linear isotropic hardening, finite strain: Hencky
+    /// elasticity on the elastic left Cauchy-Green tensor of a multiplicative split, radial return
+    /// in logarithmic strain ([`crate::step::plastic`]).
+    J2Plastic,
+}
+
+/// Yield parameters of a [`MaterialModel::J2Plastic`] material.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plasticity {
+    /// Initial yield stress sigma_y (Pa), > 0.
+    pub yield_stress: f64,
+    /// Linear isotropic hardening modulus H (Pa), >= 0: sigma_y + H eps_p.
+    pub hardening_modulus: f64,
 }
 
 /// A material, validated.
@@ -298,6 +314,8 @@ pub struct Material {
     pub youngs_modulus: f64,
     /// Poisson's ratio, in (-1, 0.5).
     pub poisson_ratio: f64,
+    /// Yield parameters (`Some` exactly for [`MaterialModel::J2Plastic`]).
+    pub plasticity: Option<Plasticity>,
 }
 
 /// 2D kinematic assumption of a body.
@@ -1162,17 +1180,18 @@ impl Validator<'_> {
     }
 
     fn material(&self, key: &str, m: &RawMaterial) -> Result<Material> {
-        let model = match m.model.as_str() {
-            "linear_elastic" => MaterialModel::LinearElastic,
-            "neo_hookean" => MaterialModel::NeoHookean,
-            other => {
-                return Err(self.invalid(
+        let model =
+            match m.model.as_str() {
+                "linear_elastic" => MaterialModel::LinearElastic,
+                "neo_hookean" => MaterialModel::NeoHookean,
+                "j2_plastic" => MaterialModel::J2Plastic,
+                other => return Err(self.invalid(
                     format!("{key}.model"),
                     format!("{other:?}"),
-                    "unknown model; expected \"linear_elastic\" or \"neo_hookean\"",
-                ))
-            }
-        };
+                    "unknown model; expected \"linear_elastic\", \"neo_hookean\" or \"j2_plastic\"",
+                )),
+            };
+        let plasticity = self.plasticity(key, m, model)?;
         let density = self.positive(&format!("{key}.density"), m.density)?;
         let youngs_modulus = self.positive(&format!("{key}.youngs_modulus"), m.youngs_modulus)?;
         let nu = m.poisson_ratio;
@@ -1189,7 +1208,59 @@ impl Validator<'_> {
             density,
             youngs_modulus,
             poisson_ratio: nu,
+            plasticity,
         })
+    }
+
+    /// The yield keys of material `key`: required for `j2_plastic`, refused for the elastic models.
+    fn plasticity(
+        &self,
+        key: &str,
+        m: &RawMaterial,
+        model: MaterialModel,
+    ) -> Result<Option<Plasticity>> {
+        if model != MaterialModel::J2Plastic {
+            let given = [
+                ("yield_stress", m.yield_stress.is_some()),
+                ("hardening_modulus", m.hardening_modulus.is_some()),
+                ("johnson_cook", m.johnson_cook.is_some()),
+            ];
+            if let Some((k, _)) = given.iter().find(|(_, g)| *g) {
+                return Err(self.invalid(
+                    format!("{key}.{k}"),
+                    "given",
+                    &format!(
+                        "only a \"j2_plastic\" material yields (this one is {:?})",
+                        m.model
+                    ),
+                ));
+            }
+            return Ok(None);
+        }
+        if let Some(jc) = &m.johnson_cook {
+            return Err(self.invalid(
+                format!("{key}.johnson_cook"),
+                jc.to_string(),
+                "the Johnson-Cook flow stress is not implemented yet: give yield_stress and \
+                 hardening_modulus (linear isotropic hardening)",
+            ));
+        }
+        let Some(y) = m.yield_stress else {
+            return Err(self.invalid(
+                format!("{key}.yield_stress"),
+                "missing",
+                "a \"j2_plastic\" material needs yield_stress (Pa, > 0)",
+            ));
+        };
+        let yield_stress = self.positive(&format!("{key}.yield_stress"), y)?;
+        let hardening_modulus = match m.hardening_modulus {
+            Some(h) => self.non_negative(&format!("{key}.hardening_modulus"), h)?,
+            None => 0.0,
+        };
+        Ok(Some(Plasticity {
+            yield_stress,
+            hardening_modulus,
+        }))
     }
 
     fn body(&self, key: &str, b: &RawBody, materials: &[Material]) -> Result<Body> {
@@ -1215,6 +1286,18 @@ impl Validator<'_> {
                 ))
             }
         };
+        if formulation == Formulation::PlaneStress
+            && materials[material].model == MaterialModel::J2Plastic
+        {
+            return Err(self.invalid(
+                format!("{key}.formulation"),
+                "\"plane_stress\"",
+                &format!(
+                    "material {:?} is \"j2_plastic\", which runs in plane strain only so far",
+                    materials[material].name
+                ),
+            ));
+        }
         let thickness = match b.thickness {
             Some(t) => self.positive(&format!("{key}.thickness"), t)?,
             None => 1.0,

@@ -18,6 +18,8 @@
 //! - [`stress`]: the stiff and extreme cases of `assets/stress/` (REFERENCES.md section 6): stiff
 //!   penalty, mass and element-size ratios, impacts up to 0.3 c, a thin plate crossed within a
 //!   step, nu = 0.499, initial overlaps, corner impacts, time_step_scale 1.0 and 1.2;
+//! - [`plastic`]: J2 plasticity: the plastic patch test of REFERENCES.md section 10 against the
+//!   closed form, its energy audit with `plastic_work`, objectivity under rigid rotations;
 //! - [`plan`]: a scene pays only for what it uses: the exact stages of the plan, `ricochet check`
 //!   printing it, no contact state without contact, and `ricochet bench` reporting its ratios;
 //! - [`bad_input`]: every rejected scene exits with status 2 and names the file, key and value;
@@ -56,6 +58,8 @@ mod patch;
 mod patch_contact;
 #[path = "core/plan.rs"]
 mod plan;
+#[path = "core/plastic.rs"]
+mod plastic;
 #[path = "core/plot.rs"]
 mod plot;
 #[path = "core/restart.rs"]

@@ -444,6 +444,7 @@ impl GpuSolver {
                 internal: w(5) as f64,
                 hourglass: w(6) as f64,
                 viscous: w(7) as f64,
+                plastic: 0.0,
                 external: w(8) as f64,
                 contact: 0.0,
                 contacts: Vec::new(),
@@ -712,6 +713,7 @@ impl GpuSolver {
             step,
             displacement,
             velocity,
+            plastic: Vec::new(),
         })
     }
 

@@ -186,6 +186,17 @@ impl GpuState {
                 max_groups * 64
             )));
         }
+        if let Some(b) = model
+            .bodies
+            .iter()
+            .find(|b| b.params.model == MaterialModel::J2Plastic)
+        {
+            return Err(Error::Gpu(format!(
+                "body {:?} is of a \"j2_plastic\" material, which the GPU backend does not run \
+                 yet: run it with --backend cpu",
+                b.name
+            )));
+        }
         use wgpu::BufferUsages as U;
         let storage = U::STORAGE;
         let mut a = Alloc {
@@ -204,6 +215,8 @@ impl GpuState {
                     model: match p.model {
                         MaterialModel::LinearElastic => 0,
                         MaterialModel::NeoHookean => 1,
+                        // Refused above.
+                        MaterialModel::J2Plastic => 1,
                     },
                     formulation: match p.formulation {
                         Formulation::PlaneStrain => 0,

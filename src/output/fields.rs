@@ -17,7 +17,8 @@ use std::path::{Path, PathBuf};
 use crate::error::Result;
 use crate::model::Model;
 use crate::scene::{FieldFormat, Formulation, MaterialModel};
-use crate::step::element::{evaluate, Dissipation};
+use crate::step::element::{evaluate_state, quad_geometry, Dissipation};
+use crate::step::plastic::PlasticState;
 use crate::step::Snapshot;
 
 use super::{create_dir, write_file, write_pieces};
@@ -31,20 +32,38 @@ pub struct ElementFields {
     pub von_mises: f64,
     /// Equivalent (von Mises) strain of the small strain or of the Green-Lagrange strain.
     pub equivalent_strain: f64,
+    /// Equivalent plastic strain (0 for the elastic models).
+    pub plastic_strain: f64,
+    /// Pressure -tr(sigma) / 3.
+    pub pressure: f64,
 }
 
-/// Stress and strain of element `e` for displacements `u`.
+/// Stress and strain of element `e` for displacements `u` (a J2 plastic element as if virgin:
+/// see [`element_fields_state`]).
 pub fn element_fields(model: &Model, u: &[[f64; 2]], e: usize) -> ElementFields {
+    element_fields_state(model, u, e, &PlasticState::VIRGIN)
+}
+
+/// Stress and strain of element `e` for displacements `u` and its plastic state `plastic` (the
+/// state the solver reached at u; elastic models ignore it).
+pub fn element_fields_state(
+    model: &Model,
+    u: &[[f64; 2]],
+    e: usize,
+    plastic: &PlasticState,
+) -> ElementFields {
     let p = model.params(e);
     let q = model.quads[e];
     let ue = q.map(|i| u[i as usize]);
-    let out = evaluate(
+    let out = evaluate_state(
         p,
+        &quad_geometry(&model.corners[e]),
         &model.corners[e],
         &ue,
         &[[0.0; 2]; 4],
         &Dissipation::default(),
         0.0,
+        plastic,
     );
     let [sxx, syy, sxy, szz] = out.stress;
     let von_mises = (0.5
@@ -53,7 +72,7 @@ pub fn element_fields(model: &Model, u: &[[f64; 2]], e: usize) -> ElementFields 
     let f = out.def_grad;
     let (exx, eyy, exy) = match p.model {
         MaterialModel::LinearElastic => (f[0] - 1.0, f[3] - 1.0, 0.5 * (f[1] + f[2])),
-        MaterialModel::NeoHookean => (
+        MaterialModel::NeoHookean | MaterialModel::J2Plastic => (
             0.5 * (f[0] * f[0] + f[2] * f[2] - 1.0),
             0.5 * (f[1] * f[1] + f[3] * f[3] - 1.0),
             0.5 * (f[0] * f[1] + f[2] * f[3]),
@@ -70,6 +89,9 @@ pub fn element_fields(model: &Model, u: &[[f64; 2]], e: usize) -> ElementFields 
         stress: out.stress,
         von_mises,
         equivalent_strain,
+        // At the state reached at u, the return is elastic: out.plastic is `plastic`.
+        plastic_strain: out.plastic.alpha,
+        pressure: -(sxx + syy + szz) / 3.0,
     }
 }
 
@@ -319,6 +341,7 @@ fn compress(data: &[u8]) -> Vec<Vec<u8>> {
 fn all_element_fields(
     model: &Model,
     u: &[[f64; 2]],
+    plastic: &[PlasticState],
     elems: std::ops::Range<usize>,
 ) -> Vec<ElementFields> {
     let threads = std::thread::available_parallelism()
@@ -334,7 +357,10 @@ fn all_element_fields(
                 s.spawn(move || {
                     chunk
                         .iter()
-                        .map(|&e| element_fields(model, u, e))
+                        .map(|&e| match plastic.get(e) {
+                            Some(st) => element_fields_state(model, u, e, st),
+                            None => element_fields(model, u, e),
+                        })
                         .collect::<Vec<_>>()
                 })
             })
@@ -409,8 +435,8 @@ fn arrays(model: &Model, snap: &Snapshot, body: &crate::model::BodyModel) -> [Ve
             values: vec3(&|i| snap.velocity[i]),
         },
     ];
-    let fields = all_element_fields(model, &snap.displacement, elems.clone());
-    let cell_data = vec![
+    let fields = all_element_fields(model, &snap.displacement, &snap.plastic, elems.clone());
+    let mut cell_data = vec![
         Array {
             name: "stress",
             components: 4,
@@ -430,6 +456,20 @@ fn arrays(model: &Model, snap: &Snapshot, body: &crate::model::BodyModel) -> [Ve
             values: Values::F64(fields.iter().map(|f| f.equivalent_strain).collect()),
         },
     ];
+    if body.params.model == MaterialModel::J2Plastic {
+        cell_data.push(Array {
+            name: "plastic_strain",
+            components: 1,
+            extra: "",
+            values: Values::F64(fields.iter().map(|f| f.plastic_strain).collect()),
+        });
+        cell_data.push(Array {
+            name: "pressure",
+            components: 1,
+            extra: "",
+            values: Values::F64(fields.iter().map(|f| f.pressure).collect()),
+        });
+    }
     [points, cells, point_data, cell_data]
 }
 

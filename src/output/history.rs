@@ -31,17 +31,17 @@ pub struct EnergyAudit {
 }
 
 impl EnergyAudit {
-    /// Total energy of a sample: kinetic + internal + hourglass + viscous work + contact energy
-    /// - external work.
+    /// Total energy of a sample: kinetic + internal + hourglass + viscous work + plastic work +
+    /// contact energy - external work.
     pub fn total(s: &Sample) -> f64 {
-        s.kinetic + s.internal + s.hourglass + s.viscous + s.contact - s.external
+        s.kinetic + s.internal + s.hourglass + s.viscous + s.plastic + s.contact - s.external
     }
 
     /// The balance error of `s` relative to the largest energy seen so far (this sample included).
     pub fn error(&mut self, s: &Sample) -> f64 {
         let total = Self::total(s);
         let e0 = *self.initial.get_or_insert(total);
-        let stored = s.kinetic + s.internal + s.hourglass + s.viscous + s.contact.abs();
+        let stored = s.kinetic + s.internal + s.hourglass + s.viscous + s.plastic + s.contact.abs();
         self.largest = self
             .largest
             .max(stored.abs())
@@ -64,15 +64,23 @@ pub struct HistoryWriter {
     /// Bytes and rows written so far (header included in the bytes).
     bytes: u64,
     rows: u64,
+    /// Whether the rows have the `plastic_work` column.
+    plastic: bool,
 }
 
 impl HistoryWriter {
     /// Creates the file and writes the header; `bodies` name the per-body columns and `contacts`
-    /// the per-contact (and rigid wall) columns.
+    /// the per-contact (and rigid wall) columns; `plastic` adds the `plastic_work` column after
+    /// `viscous_work` (scenes with a J2 plastic material).
     ///
     /// # Errors
     /// [`Error::Write`] when the file cannot be created.
-    pub fn create(path: &Path, bodies: &[String], contacts: &[String]) -> Result<Self> {
+    pub fn create(
+        path: &Path,
+        bodies: &[String],
+        contacts: &[String],
+        plastic: bool,
+    ) -> Result<Self> {
         let file = File::create(path).map_err(|source| Error::Write {
             path: path.to_path_buf(),
             source,
@@ -82,8 +90,12 @@ impl HistoryWriter {
             out: BufWriter::new(file),
             bytes: 0,
             rows: 0,
+            plastic,
         };
         let mut header = COLUMNS.join(",");
+        if plastic {
+            header = header.replace(",viscous_work,", ",viscous_work,plastic_work,");
+        }
         for b in bodies {
             header.push_str(&format!(",{b}.vx,{b}.vy"));
         }
@@ -102,7 +114,7 @@ impl HistoryWriter {
     /// # Errors
     /// [`Error::Checkpoint`] when the file is shorter than `bytes` (it is not the checkpoint's),
     /// [`Error::Write`] when it cannot be opened.
-    pub fn resume(path: &Path, bytes: u64, rows: u64) -> Result<Self> {
+    pub fn resume(path: &Path, bytes: u64, rows: u64, plastic: bool) -> Result<Self> {
         use std::io::{Seek, SeekFrom};
         let write_err = |source| Error::Write {
             path: path.to_path_buf(),
@@ -128,6 +140,7 @@ impl HistoryWriter {
             out: BufWriter::new(file),
             bytes,
             rows,
+            plastic,
         })
     }
 
@@ -156,8 +169,13 @@ impl HistoryWriter {
     /// # Errors
     /// [`Error::Write`] on I/O failure.
     pub fn row(&mut self, s: &Sample, energy_error: f64) -> Result<()> {
+        let plastic = if self.plastic {
+            format!(",{:e}", s.plastic)
+        } else {
+            String::new()
+        };
         let mut line = format!(
-            "{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+            "{:e},{},{:e},{:e},{:e},{:e},{:e}{plastic},{:e},{:e},{:e}",
             s.time,
             s.step,
             s.dt,

@@ -5,7 +5,8 @@ use crate::error::Result;
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
 
-use super::element::{evaluate, evaluate_with, quad_geometry, Dissipation, QuadGeometry};
+use super::element::{evaluate, evaluate_state, quad_geometry, Dissipation, QuadGeometry};
+use super::plastic::PlasticState;
 use super::{Clock, Event, Failure, Sample, Schedule, Snapshot, Solver};
 
 /// Explicit central-difference integration of a [`Model`] on the CPU.
@@ -38,6 +39,10 @@ struct CpuState {
     f: Vec<[f64; 2]>,
     /// Dissipative element state (empty when the plan has none).
     dissipation: Vec<Dissipation>,
+    /// Plastic state of every element at u_n (empty without a J2 plastic material).
+    plastic: Vec<PlasticState>,
+    /// Work dissipated by plastic flow so far.
+    plastic_work: f64,
     /// Contact state (none without contact).
     contact: Option<ContactSet>,
     /// Work of the contact impulses so far, and the part of the last step's after t_n.
@@ -105,6 +110,12 @@ impl CpuSolver {
             v_prev: vec![[0.0; 2]; nn],
             f: vec![[0.0; 2]; nn],
             dissipation,
+            plastic: if model.has_plasticity() {
+                vec![PlasticState::VIRGIN; ne]
+            } else {
+                Vec::new()
+            },
+            plastic_work: 0.0,
             contact: ContactSet::new(&model),
             contact_work: 0.0,
             contact_after: 0.0,
@@ -158,6 +169,7 @@ impl CpuSolver {
             && s.v_prev.len() == nn
             && s.f.len() == nn
             && s.dissipation.len() == self.s.dissipation.len()
+            && s.plastic.len() == self.s.plastic.len()
             && s.pressure_impulse.len() == self.pressure.len()
             && s.pressure_v_old.len() == self.pressure.len()
             && s.damping_v_old.len() == self.s.damping_v_old.len()
@@ -273,6 +285,7 @@ impl CpuSolver {
             hourglass_stored: 0.0,
         };
         let keep = !self.s.dissipation.is_empty();
+        let plastic = !self.s.plastic.is_empty();
         for e in 0..self.model.element_count() {
             let q = self.model.quads[e];
             let (ue, ve) = self.gather(e);
@@ -281,7 +294,7 @@ impl CpuSolver {
             } else {
                 Dissipation::default()
             };
-            let out = evaluate_with(
+            let out = evaluate_state(
                 self.model.params(e),
                 &self.geometry[e],
                 &self.model.corners[e],
@@ -289,6 +302,11 @@ impl CpuSolver {
                 &ve,
                 &prev,
                 self.s.dt_prev,
+                if plastic {
+                    &self.s.plastic[e]
+                } else {
+                    &PlasticState::VIRGIN
+                },
             );
             if out.min_corner.is_nan() || out.min_corner <= 0.0 {
                 return Err(format!(
@@ -314,6 +332,10 @@ impl CpuSolver {
                     hourglass_q: out.hourglass_q,
                     bulk_p: out.bulk_p,
                 };
+            }
+            if plastic {
+                self.s.plastic[e] = out.plastic;
+                self.s.plastic_work += out.plastic_work;
             }
             if need_energy {
                 st.strain += out.strain_energy;
@@ -545,6 +567,7 @@ impl CpuSolver {
                     .zip(&self.s.v)
                     .map(|(a, b)| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])])
                     .collect(),
+                plastic: self.s.plastic.clone(),
             }));
             self.s.clock.took_snapshot(&s, self.s.t, self.s.dt_prev);
         }
@@ -576,6 +599,7 @@ impl CpuSolver {
                 internal: st.strain,
                 hourglass: st.hourglass_stored + self.s.hourglass_work,
                 viscous: self.s.bulk_work - (self.s.damping_work - self.s.damping_after),
+                plastic: self.s.plastic_work,
                 external: self.s.external_work - 0.5 * step_work
                     + (self.s.pressure_work - self.s.pressure_after),
                 contact: -(self.s.contact_work - self.s.contact_after),

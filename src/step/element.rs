@@ -12,6 +12,8 @@
 
 use crate::scene::{Formulation, HourglassForm, Material, MaterialModel};
 
+use super::plastic::{j2_elastic, j2_stress, step_plastic_work, PlasticState};
+
 /// The sign vector of the hourglass mode of a 4-node quad.
 pub const HOURGLASS_BASE: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
 
@@ -50,6 +52,12 @@ pub struct ElementParams {
     pub bulk_linear: f64,
     /// Quadratic bulk-viscosity coefficient (0 = off).
     pub bulk_quadratic: f64,
+    /// Bulk modulus K = lambda + 2 mu / 3.
+    pub bulk_modulus: f64,
+    /// Initial yield stress (J2 plastic materials; infinite otherwise).
+    pub yield_stress: f64,
+    /// Linear isotropic hardening modulus (J2 plastic materials; 0 otherwise).
+    pub hardening: f64,
 }
 
 impl ElementParams {
@@ -86,6 +94,11 @@ impl ElementParams {
             hourglass_modulus: 2.0 * mu,
             bulk_linear: bulk.0,
             bulk_quadratic: bulk.1,
+            bulk_modulus: lambda + 2.0 * mu / 3.0,
+            yield_stress: material
+                .plasticity
+                .map_or(f64::INFINITY, |p| p.yield_stress),
+            hardening: material.plasticity.map_or(0.0, |p| p.hardening_modulus),
         }
     }
 
@@ -125,6 +138,10 @@ pub struct ElementOut {
     pub stress: [f64; 4],
     /// Deformation gradient (xx, xy, yx, yy).
     pub def_grad: [f64; 4],
+    /// Plastic state after the step (J2 plastic materials; the input state otherwise).
+    pub plastic: PlasticState,
+    /// Energy the plastic return dissipated in this evaluation (J2 plastic materials).
+    pub plastic_work: f64,
 }
 
 /// Dissipative state of an element from the previous step, for the trapezoidal work pairing.
@@ -251,7 +268,7 @@ pub fn evaluate(
 }
 
 /// [`evaluate`] with the reference geometry `g` of `dx` computed ahead (the solver keeps it per
-/// element, since it never changes).
+/// element, since it never changes), for a virgin plastic state.
 #[inline(always)]
 pub fn evaluate_with(
     p: &ElementParams,
@@ -261,6 +278,23 @@ pub fn evaluate_with(
     v: &[[f64; 2]; 4],
     prev: &Dissipation,
     dt_prev: f64,
+) -> ElementOut {
+    evaluate_state(p, g, dx, u, v, prev, dt_prev, &PlasticState::VIRGIN)
+}
+
+/// [`evaluate_with`] from the plastic state `plastic` of the previous step (used by J2 plastic
+/// materials; the returned [`ElementOut::plastic`] is the state after this step).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn evaluate_state(
+    p: &ElementParams,
+    g: &QuadGeometry,
+    dx: &[[f64; 2]; 4],
+    u: &[[f64; 2]; 4],
+    v: &[[f64; 2]; 4],
+    prev: &Dissipation,
+    dt_prev: f64,
+    plastic: &PlasticState,
 ) -> ElementOut {
     let a0t = g.area * p.thickness;
     // Deformation gradient F = I + sum_a u_a (x) b_a and its rate.
@@ -278,7 +312,20 @@ pub fn evaluate_with(
     }
     let j = det(&f);
     // Stress (first Piola-Kirchhoff, xx xy yx yy) and strain energy density.
-    let (pk, w, cauchy) = stress(p, &f, j);
+    let (pk, w, cauchy, new_plastic, plastic_density) = if p.model == MaterialModel::J2Plastic {
+        let s = j2_stress(p, &f, j, plastic);
+        let mut d = s.dissipated;
+        if s.state.alpha > plastic.alpha && dt_prev > 0.0 {
+            // F_n = F_{n+1} - dt Fdot with the old state: the start of the step that yielded.
+            let f_old: [f64; 4] = std::array::from_fn(|i| f[i] - dt_prev * fd[i]);
+            let (pk_old, w_old) = j2_elastic(p, &f_old, det(&f_old), plastic);
+            d = step_plastic_work(&pk_old, &s.pk, &fd, dt_prev, w_old, s.stored);
+        }
+        (s.pk, s.stored, s.cauchy, s.state, d)
+    } else {
+        let (pk, w, cauchy) = stress(p, &f, j);
+        (pk, w, cauchy, *plastic, 0.0)
+    };
 
     // Current geometry.
     let x: [[f64; 2]; 4] = std::array::from_fn(|a| [dx[a][0] + u[a][0], dx[a][1] + u[a][1]]);
@@ -344,7 +391,7 @@ pub fn evaluate_with(
         // Volumetric strain rate tr(Fdot F^-1) (= tr Fdot for the small-strain model).
         let rate = match p.model {
             MaterialModel::LinearElastic => fd[0] + fd[3],
-            MaterialModel::NeoHookean => {
+            MaterialModel::NeoHookean | MaterialModel::J2Plastic => {
                 (fd[0] * f[3] - fd[1] * f[2] - fd[2] * f[1] + fd[3] * f[0]) / j
             }
         };
@@ -357,7 +404,9 @@ pub fn evaluate_with(
             bulk_p = match p.model {
                 MaterialModel::LinearElastic => [-q, 0.0, 0.0, -q],
                 // -q J F^-T = -q cof(F)
-                MaterialModel::NeoHookean => [-q * f[3], q * f[2], q * f[1], -q * f[0]],
+                MaterialModel::NeoHookean | MaterialModel::J2Plastic => {
+                    [-q * f[3], q * f[2], q * f[1], -q * f[0]]
+                }
             };
         }
         // Stable step with the viscosity: the linear part always (so that dt does not jump when
@@ -390,11 +439,14 @@ pub fn evaluate_with(
         min_corner,
         stress: cauchy,
         def_grad: f,
+        plastic: new_plastic,
+        plastic_work: plastic_density * a0t,
     }
 }
 
 /// First Piola-Kirchhoff stress (xx xy yx yy), strain energy per reference volume, and the Cauchy
-/// stress (xx yy xy zz) for the deformation gradient `f` with determinant `j`.
+/// stress (xx yy xy zz) for the deformation gradient `f` with determinant `j` (a J2 plastic
+/// material from the virgin state: see [`evaluate_state`] for a yielded one).
 #[inline(always)]
 pub fn stress(p: &ElementParams, f: &[f64; 4], j: f64) -> ([f64; 4], f64, [f64; 4]) {
     match p.model {
@@ -437,6 +489,10 @@ pub fn stress(p: &ElementParams, f: &[f64; 4], j: f64) -> ([f64; 4], f64, [f64; 
             };
             (pk, w, [sxx, syy, sxy, szz])
         }
+        MaterialModel::J2Plastic => {
+            let s = j2_stress(p, f, j, &PlasticState::VIRGIN);
+            (s.pk, s.stored, s.cauchy)
+        }
     }
 }
 
@@ -465,6 +521,7 @@ mod tests {
             density: 7850.0,
             youngs_modulus: 210e9,
             poisson_ratio: 0.3,
+            plasticity: None,
         }
     }
 
@@ -569,6 +626,7 @@ mod tests {
             density: 7850.0,
             youngs_modulus: 210e9,
             poisson_ratio: 0.0,
+            plasticity: None,
         };
         let p = ElementParams::new(
             &m,

@@ -12,6 +12,7 @@
 
 pub mod cpu;
 pub mod element;
+pub mod plastic;
 
 use crate::error::Result;
 
@@ -170,6 +171,8 @@ pub struct Sample {
     pub hourglass: f64,
     /// Work dissipated by the bulk viscosity.
     pub viscous: f64,
+    /// Work dissipated by plastic flow (0 without a J2 plastic material).
+    pub plastic: f64,
     /// Work done on the model by prescribed velocities.
     pub external: f64,
     /// Contact energy: penalty energy stored plus the work the contact corrections removed
@@ -192,6 +195,8 @@ pub struct Snapshot {
     pub displacement: Vec<[f64; 2]>,
     /// Velocities at t_n, (v^{n-1/2} + v^{n+1/2}) / 2.
     pub velocity: Vec<[f64; 2]>,
+    /// Plastic state of every element at t_n (empty for a model without a J2 plastic material).
+    pub plastic: Vec<plastic::PlasticState>,
 }
 
 /// Why a run stopped early.

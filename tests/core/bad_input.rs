@@ -121,6 +121,64 @@ fn non_positive_youngs_modulus() {
     );
 }
 
+/// The base scene's material made `j2_plastic` with `keys` (TOML lines) added.
+fn plastic(keys: &str) -> String {
+    variant(
+        "model = \"linear_elastic\"",
+        &format!("model = \"j2_plastic\"\n{keys}"),
+    )
+}
+
+#[test]
+fn bad_plastic_materials() {
+    expect_accepted(
+        "plastic_ok",
+        &plastic("yield_stress = 2.5e8\nhardening_modulus = 1.0e9"),
+        true,
+    );
+    expect_rejected(
+        "plastic_zero_yield",
+        &plastic("yield_stress = 0.0"),
+        &["material[0].yield_stress", "0.0"],
+    );
+    expect_rejected(
+        "plastic_negative_yield",
+        &plastic("yield_stress = -2.5e8"),
+        &["material[0].yield_stress", "-250000000"],
+    );
+    expect_rejected(
+        "plastic_no_yield",
+        &plastic("hardening_modulus = 1.0e9"),
+        &["material[0].yield_stress", "missing"],
+    );
+    expect_rejected(
+        "plastic_negative_hardening",
+        &plastic("yield_stress = 2.5e8\nhardening_modulus = -1.0e9"),
+        &["material[0].hardening_modulus", "-1000000000"],
+    );
+    expect_rejected(
+        "plastic_johnson_cook",
+        &plastic("yield_stress = 2.5e8\njohnson_cook = { a = 9.0e7, b = 2.92e8 }"),
+        &["material[0].johnson_cook", "not implemented"],
+    );
+    expect_rejected(
+        "elastic_with_yield",
+        &variant(
+            "poisson_ratio = 0.3",
+            "poisson_ratio = 0.3\nyield_stress = 2.5e8",
+        ),
+        &["material[0].yield_stress", "j2_plastic"],
+    );
+    expect_rejected(
+        "plastic_plane_stress",
+        &plastic("yield_stress = 2.5e8").replace(
+            "material = \"steel\"",
+            "material = \"steel\"\nformulation = \"plane_stress\"",
+        ),
+        &["body[0].formulation", "plane_stress", "j2_plastic"],
+    );
+}
+
 #[test]
 fn poisson_ratio_of_one_half() {
     expect_rejected(

@@ -26,6 +26,7 @@ pub fn material(model: MaterialModel, youngs_modulus: f64, nu: f64, density: f64
         density,
         youngs_modulus,
         poisson_ratio: nu,
+        plasticity: None,
     }
 }
 
