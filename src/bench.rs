@@ -226,6 +226,7 @@ impl BareLoop {
                 self.dissipation[e] = Dissipation {
                     hourglass_q: out.hourglass_q,
                     bulk_p: out.bulk_p,
+                    bulk_hoop: out.bulk_hoop,
                 };
             }
             self.dt_min = std::hint::black_box(dt_min);

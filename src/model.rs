@@ -10,7 +10,7 @@ use crate::contact::Overlap;
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::scene::{self, Scene};
-use crate::step::element::{min_corner_ratio, quad_geometry, ElementParams};
+use crate::step::element::{min_corner_ratio, quad_geometry, ElementParams, QuadGeometry};
 
 /// One body's slice of the model.
 #[derive(Debug, Clone)]
@@ -78,6 +78,9 @@ pub struct Model {
     pub quads: Vec<[u32; 4]>,
     /// Reference corner coordinates of each element relative to the element's centre.
     pub corners: Vec<[[f64; 2]; 4]>,
+    /// Reference radius (x) of each element's centre, for axisymmetric bodies (empty when the
+    /// model has none; 0 for the elements of other bodies).
+    pub radius: Vec<f64>,
     /// Slave nodes that started behind a contact surface or wall and were moved onto it.
     pub initial_overlaps: Vec<Overlap>,
     /// Body of each element.
@@ -112,6 +115,7 @@ impl Model {
             velocity: Vec::new(),
             quads: Vec::new(),
             corners: Vec::new(),
+            radius: Vec::new(),
             element_body: Vec::new(),
             bodies: Vec::new(),
             constraints: Vec::new(),
@@ -121,8 +125,34 @@ impl Model {
             pressures: Vec::new(),
             mass_damping: scene.run.mass_damping,
         };
+        let any_axi = scene
+            .bodies
+            .iter()
+            .any(|b| b.formulation == scene::Formulation::Axisymmetric);
         for (bi, body) in scene.bodies.iter().enumerate() {
             let mesh = Mesh::generate(&body.mesh);
+            let axi = body.formulation == scene::Formulation::Axisymmetric;
+            if axi {
+                // Every node at x = r >= 0 (to round-off of the body's size).
+                let size = mesh
+                    .nodes
+                    .iter()
+                    .fold(0.0f64, |m, p| m.max(p[0].abs()).max(p[1].abs()))
+                    + mesh.origin[0].abs();
+                if let Some((i, p)) = mesh
+                    .nodes
+                    .iter()
+                    .enumerate()
+                    .find(|(_, p)| mesh.origin[0] + p[0] < -1e-12 * size)
+                {
+                    return Err(scene::invalid(
+                        scene,
+                        format!("body[{bi}].mesh"),
+                        format!("node {i} at x = {:e}", mesh.origin[0] + p[0]),
+                        "an axisymmetric body lies at x = r >= 0 (the axis is x = 0)",
+                    ));
+                }
+            }
             let material = &scene.materials[body.material];
             let params = ElementParams::new(
                 material,
@@ -147,13 +177,20 @@ impl Model {
                         "inverted, zero-area or non-convex element (quads must be convex and counter-clockwise)",
                     ));
                 }
-                let lumped = lumped_mass(&x, params.density * params.thickness);
+                let lumped = if axi {
+                    lumped_mass_axisymmetric(&x, params.density, mesh.origin[0])
+                } else {
+                    lumped_mass(&x, params.density * params.thickness)
+                };
                 for a in 0..4 {
                     mass[q[a] as usize] += lumped[a];
                 }
                 let cx = 0.25 * (x[0][0] + x[1][0] + x[2][0] + x[3][0]);
                 let cy = 0.25 * (x[0][1] + x[1][1] + x[2][1] + x[3][1]);
                 m.corners.push(x.map(|p| [p[0] - cx, p[1] - cy]));
+                if any_axi {
+                    m.radius.push(if axi { mesh.origin[0] + cx } else { 0.0 });
+                }
                 m.quads.push(q.map(|i| i + n0 as u32));
                 m.element_body.push(bi as u32);
             }
@@ -248,6 +285,27 @@ impl Model {
                 ));
             }
         }
+        // Axisymmetric bodies: the nodes on the axis keep u_r = 0 (whatever the boundaries say).
+        for (bi, body) in scene.bodies.iter().enumerate() {
+            if body.formulation != scene::Formulation::Axisymmetric {
+                continue;
+            }
+            let nodes = m.bodies[bi].nodes.clone();
+            let size = nodes.clone().fold(0.0f64, |s, n| {
+                s.max(m.position[n][0].abs()).max(m.position[n][1].abs())
+            });
+            for n in nodes {
+                if m.position[n][0].abs() <= 1e-12 * size {
+                    cons[n]
+                        .get_or_insert(NodeConstraint {
+                            node: n as u32,
+                            vx: None,
+                            vy: None,
+                        })
+                        .vx = Some(0.0);
+                }
+            }
+        }
         m.constraints = cons.into_iter().flatten().collect();
         for c in &m.constraints {
             let v = &mut m.velocity[c.node as usize];
@@ -271,7 +329,7 @@ impl Model {
         let m = self;
         m.pressures.clear();
         for p in &scene.pressures {
-            let load = m.pressure_load(p, scene.bodies[p.body].thickness);
+            let load = m.pressure_load(p, &scene.bodies[p.body]);
             if load.edges == 0 {
                 return Err(scene::invalid(
                     scene,
@@ -292,7 +350,8 @@ impl Model {
     /// The nodal forces per unit pressure of `p`: on every boundary edge of its body whose two
     /// nodes lie in its box (reference coordinates, bounds included), `L t / 2` on each node along
     /// the edge's inward normal.
-    fn pressure_load(&self, p: &scene::Pressure, thickness: f64) -> PressureLoad {
+    fn pressure_load(&self, p: &scene::Pressure, body: &scene::Body) -> PressureLoad {
+        let axi = body.formulation == scene::Formulation::Axisymmetric;
         let surface = Surface::of_body(self, p.body);
         let inside = |n: u32| {
             let x = self.position[n as usize];
@@ -309,11 +368,17 @@ impl Model {
             // Outward normal times length: (t_y, -t_x) with t = b - a (body on the left).
             let (xa, xb) = (self.position[a as usize], self.position[b as usize]);
             let t = [xb[0] - xa[0], xb[1] - xa[1]];
-            let f = [-0.5 * thickness * t[1], 0.5 * thickness * t[0]];
-            for n in [a, b] {
+            // Per node: t / 2 (planar), or the integral of N r along the edge per radian,
+            // (2 r_a + r_b) / 6 and (r_a + 2 r_b) / 6 (axisymmetric).
+            let weights = if axi {
+                [(2.0 * xa[0] + xb[0]) / 6.0, (xa[0] + 2.0 * xb[0]) / 6.0]
+            } else {
+                [0.5 * body.thickness; 2]
+            };
+            for (n, w) in [a, b].into_iter().zip(weights) {
                 let e = force.entry(n).or_insert([0.0; 2]);
-                e[0] += f[0];
-                e[1] += f[1];
+                e[0] -= w * t[1];
+                e[1] += w * t[0];
             }
         }
         PressureLoad {
@@ -344,6 +409,26 @@ impl Model {
         &self.bodies[self.element_body[e] as usize].params
     }
 
+    /// Reference geometry of element `e`, with its centre's radius for an axisymmetric body.
+    pub fn geometry(&self, e: usize) -> QuadGeometry {
+        let mut g = quad_geometry(&self.corners[e]);
+        if let Some(&r) = self.radius.get(e) {
+            g.radius = r;
+        }
+        g
+    }
+
+    /// The out-of-plane extent of element `e`: its body's thickness, or its centre's radius for
+    /// an axisymmetric body (whose quantities are per radian).
+    pub fn thickness(&self, e: usize) -> f64 {
+        let p = self.params(e);
+        if p.formulation == scene::Formulation::Axisymmetric {
+            self.radius[e]
+        } else {
+            p.thickness
+        }
+    }
+
     /// Whether a body is of a J2 plastic material (the solvers then keep a plastic state per
     /// element).
     pub fn has_plasticity(&self) -> bool {
@@ -353,8 +438,18 @@ impl Model {
     }
 }
 
+/// Row-sum lumped masses per radian of an axisymmetric bilinear quad: `rho * integral of N_a r`
+/// by 2x2 Gauss quadrature, r = `x0` + x (`x` relative to the mesh origin `x0`).
+pub fn lumped_mass_axisymmetric(x: &[[f64; 2]; 4], rho: f64, x0: f64) -> [f64; 4] {
+    lumped_mass_weighted(x, rho, Some(x0))
+}
+
 /// Row-sum lumped masses of a bilinear quad: `rho_t * integral of N_a`, by 2x2 Gauss quadrature.
 pub fn lumped_mass(x: &[[f64; 2]; 4], rho_t: f64) -> [f64; 4] {
+    lumped_mass_weighted(x, rho_t, None)
+}
+
+fn lumped_mass_weighted(x: &[[f64; 2]; 4], rho_t: f64, x0: Option<f64>) -> [f64; 4] {
     let g = 1.0 / 3f64.sqrt();
     let mut m = [0.0; 4];
     let xi_a = [-1.0, 1.0, 1.0, -1.0];
@@ -371,9 +466,14 @@ pub fn lumped_mass(x: &[[f64; 2]; 4], rho_t: f64) -> [f64; 4] {
             j[3] += deta * x[a][1];
         }
         let det = j[0] * j[3] - j[1] * j[2];
+        let n: [f64; 4] =
+            std::array::from_fn(|a| 0.25 * (1.0 + xi_a[a] * xi) * (1.0 + eta_a[a] * eta));
+        let r = match x0 {
+            Some(x0) => x0 + (0..4).map(|a| n[a] * x[a][0]).sum::<f64>(),
+            None => 1.0,
+        };
         for a in 0..4 {
-            let n = 0.25 * (1.0 + xi_a[a] * xi) * (1.0 + eta_a[a] * eta);
-            m[a] += rho_t * n * det;
+            m[a] += rho_t * n[a] * det * r;
         }
     }
     m

@@ -325,6 +325,9 @@ pub enum Formulation {
     PlaneStrain,
     /// Plane stress (sigma_zz = 0).
     PlaneStress,
+    /// Axisymmetric about the y axis: x = r >= 0 the radius, y the axis; the out-of-plane
+    /// direction is the hoop direction, and masses, forces and energies are per radian.
+    Axisymmetric,
 }
 
 /// Hourglass control form.
@@ -1278,11 +1281,12 @@ impl Validator<'_> {
         let formulation = match b.formulation.as_deref() {
             None | Some("plane_strain") => Formulation::PlaneStrain,
             Some("plane_stress") => Formulation::PlaneStress,
+            Some("axisymmetric") => Formulation::Axisymmetric,
             Some(other) => {
                 return Err(self.invalid(
                     format!("{key}.formulation"),
                     format!("{other:?}"),
-                    "expected \"plane_strain\" or \"plane_stress\"",
+                    "expected \"plane_strain\", \"plane_stress\" or \"axisymmetric\"",
                 ))
             }
         };
@@ -1293,15 +1297,23 @@ impl Validator<'_> {
                 format!("{key}.formulation"),
                 "\"plane_stress\"",
                 &format!(
-                    "material {:?} is \"j2_plastic\", which runs in plane strain only so far",
+                    "material {:?} is \"j2_plastic\", which runs in plane strain and \
+                     axisymmetric bodies only so far",
                     materials[material].name
                 ),
             ));
         }
-        let thickness = match b.thickness {
-            Some(t) => self.positive(&format!("{key}.thickness"), t)?,
-            None => 1.0,
-        };
+        let thickness =
+            match b.thickness {
+                Some(t) if formulation == Formulation::Axisymmetric => return Err(self.invalid(
+                    format!("{key}.thickness"),
+                    fmt_num(t),
+                    "an axisymmetric body has no thickness: its masses, forces and energies are \
+                     per radian",
+                )),
+                Some(t) => self.positive(&format!("{key}.thickness"), t)?,
+                None => 1.0,
+            };
         let mesh = self.mesh(&format!("{key}.mesh"), &b.mesh)?;
         let v0 = b.initial_velocity.unwrap_or([0.0, 0.0]);
         self.finite(&format!("{key}.initial_velocity"), v0[0])?;

@@ -18,6 +18,8 @@
 //! - [`stress`]: the stiff and extreme cases of `assets/stress/` (REFERENCES.md section 6): stiff
 //!   penalty, mass and element-size ratios, impacts up to 0.3 c, a thin plate crossed within a
 //!   step, nu = 0.499, initial overlaps, corner impacts, time_step_scale 1.0 and 1.2;
+//! - [`axisymmetric`]: the axisymmetric formulation: hoop-strain patch test, masses per radian,
+//!   the axis held at u_r = 0, refused inputs;
 //! - [`plastic`]: J2 plasticity: the plastic patch test of REFERENCES.md section 10 against the
 //!   closed form, its energy audit with `plastic_work`, objectivity under rigid rotations;
 //! - [`plan`]: a scene pays only for what it uses: the exact stages of the plan, `ricochet check`
@@ -36,6 +38,8 @@
 #[path = "core/common.rs"]
 mod common;
 
+#[path = "core/axisymmetric.rs"]
+mod axisymmetric;
 #[path = "core/bad_input.rs"]
 mod bad_input;
 #[path = "core/contact.rs"]

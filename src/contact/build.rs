@@ -69,12 +69,13 @@ impl Builder<'_> {
     /// penalty stiffness `scale` K t L^2 / A.
     fn masters(&mut self, p: &mut Pass, b: usize, share: f64, scale: f64) {
         let ms = self.surface(b);
-        let k_body = bulk_modulus(self.model, b) * self.model.bodies[b].params.thickness;
+        let k_body = bulk_modulus(self.model, b);
         for s in &ms.segments {
             let l = surface::length(self.model, s);
             self.min_length = self.min_length.min(l);
+            let t = self.model.thickness(s.element as usize);
             p.stiffness
-                .push(share * scale * k_body * l * l / element_area(self.model, s.element));
+                .push(share * scale * k_body * t * l * l / element_area(self.model, s.element));
             let ab = s.nodes.map(|g| self.add(g));
             p.segments.push(ab);
             p.segment_body.push(b as u32);
@@ -133,14 +134,15 @@ impl Builder<'_> {
         let mut stiffness = Vec::new();
         for &b in &w.bodies {
             let s = self.surface(b);
-            let k_body = bulk_modulus(self.model, b) * self.model.bodies[b].params.thickness;
+            let k_body = bulk_modulus(self.model, b);
             for &g in &s.nodes {
                 // The node's stiffest adjacent boundary segment.
                 let mut k = 0.0f64;
                 for seg in s.segments.iter().filter(|seg| seg.nodes.contains(&g)) {
                     let l = surface::length(self.model, seg);
                     self.min_length = self.min_length.min(l);
-                    k = k.max(l * l / element_area(self.model, seg.element));
+                    let t = self.model.thickness(seg.element as usize);
+                    k = k.max(t * l * l / element_area(self.model, seg.element));
                 }
                 nodes.push(self.add(g));
                 body.push(b as u32);

@@ -189,6 +189,17 @@ impl GpuState {
         if let Some(b) = model
             .bodies
             .iter()
+            .find(|b| b.params.formulation == Formulation::Axisymmetric)
+        {
+            return Err(Error::Gpu(format!(
+                "body {:?} is axisymmetric, which the GPU backend does not run yet: run it with \
+                 --backend cpu",
+                b.name
+            )));
+        }
+        if let Some(b) = model
+            .bodies
+            .iter()
             .find(|b| b.params.model == MaterialModel::J2Plastic)
         {
             return Err(Error::Gpu(format!(
@@ -221,6 +232,8 @@ impl GpuState {
                     formulation: match p.formulation {
                         Formulation::PlaneStrain => 0,
                         Formulation::PlaneStress => 1,
+                        // Refused above.
+                        Formulation::Axisymmetric => 0,
                     },
                     hourglass: match p.hourglass {
                         HourglassForm::None => 0,

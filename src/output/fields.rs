@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use crate::error::Result;
 use crate::model::Model;
 use crate::scene::{FieldFormat, Formulation, MaterialModel};
-use crate::step::element::{evaluate_state, quad_geometry, Dissipation};
+use crate::step::element::{evaluate_state, Dissipation};
 use crate::step::plastic::PlasticState;
 use crate::step::Snapshot;
 
@@ -57,7 +57,7 @@ pub fn element_fields_state(
     let ue = q.map(|i| u[i as usize]);
     let out = evaluate_state(
         p,
-        &quad_geometry(&model.corners[e]),
+        &model.geometry(e),
         &model.corners[e],
         &ue,
         &[[0.0; 2]; 4],
@@ -78,8 +78,13 @@ pub fn element_fields_state(
             0.5 * (f[0] * f[1] + f[2] * f[3]),
         ),
     };
+    let h = out.hoop_stretch;
     let ezz = match p.formulation {
         Formulation::PlaneStrain => 0.0,
+        Formulation::Axisymmetric => match p.model {
+            MaterialModel::LinearElastic => h - 1.0,
+            _ => 0.5 * (h * h - 1.0),
+        },
         Formulation::PlaneStress => -p.lambda / (p.lambda + 2.0 * p.mu) * (exx + eyy),
     };
     let m = (exx + eyy + ezz) / 3.0;

@@ -5,7 +5,7 @@ use crate::error::Result;
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
 
-use super::element::{evaluate, evaluate_state, quad_geometry, Dissipation, QuadGeometry};
+use super::element::{evaluate_state, Dissipation, QuadGeometry};
 use super::plastic::PlasticState;
 use super::{Clock, Event, Failure, Sample, Schedule, Snapshot, Solver};
 
@@ -137,7 +137,9 @@ impl CpuSolver {
             done: false,
         };
         Self {
-            geometry: model.corners.iter().map(quad_geometry).collect(),
+            geometry: (0..model.element_count())
+                .map(|e| model.geometry(e))
+                .collect(),
             inv_mass: model.mass.iter().map(|m| 1.0 / m).collect(),
             pressure,
             model,
@@ -221,13 +223,19 @@ impl CpuSolver {
         let mut best = (f64::INFINITY, 0);
         for e in 0..self.model.element_count() {
             let (ue, ve) = self.gather(e);
-            let out = evaluate(
+            let out = evaluate_state(
                 self.model.params(e),
+                &self.geometry[e],
                 &self.model.corners[e],
                 &ue,
                 &ve,
                 &Dissipation::default(),
                 0.0,
+                if self.s.plastic.is_empty() {
+                    &PlasticState::VIRGIN
+                } else {
+                    &self.s.plastic[e]
+                },
             );
             if out.dt < best.0 {
                 best = (out.dt, e);
@@ -331,6 +339,7 @@ impl CpuSolver {
                 self.s.dissipation[e] = Dissipation {
                     hourglass_q: out.hourglass_q,
                     bulk_p: out.bulk_p,
+                    bulk_hoop: out.bulk_hoop,
                 };
             }
             if plastic {
@@ -692,5 +701,9 @@ impl Solver for CpuSolver {
 
     fn displacement_now(&mut self) -> Result<Vec<[f64; 2]>> {
         Ok(self.displacement().to_vec())
+    }
+
+    fn plastic_now(&mut self) -> Result<Vec<PlasticState>> {
+        Ok(self.s.plastic.clone())
     }
 }

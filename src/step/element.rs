@@ -75,7 +75,7 @@ impl ElementParams {
         let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
         let mu = e / (2.0 * (1.0 + nu));
         let lambda_plane = match formulation {
-            Formulation::PlaneStrain => lambda,
+            Formulation::PlaneStrain | Formulation::Axisymmetric => lambda,
             Formulation::PlaneStress => 2.0 * lambda * mu / (lambda + 2.0 * mu),
         };
         Self {
@@ -128,6 +128,8 @@ pub struct ElementOut {
     pub hourglass_q: [f64; 2],
     /// Bulk-viscosity first Piola-Kirchhoff stress (xx, xy, yx, yy).
     pub bulk_p: [f64; 4],
+    /// Its hoop component (axisymmetric elements).
+    pub bulk_hoop: f64,
     /// Work dissipated by the viscous hourglass forces over the last step (pairing n-1 and n).
     pub hourglass_work: f64,
     /// Work dissipated by the bulk viscosity over the last step.
@@ -138,6 +140,8 @@ pub struct ElementOut {
     pub stress: [f64; 4],
     /// Deformation gradient (xx, xy, yx, yy).
     pub def_grad: [f64; 4],
+    /// Out-of-plane stretch F_33 (axisymmetric: r / R; 1 otherwise).
+    pub hoop_stretch: f64,
     /// Plastic state after the step (J2 plastic materials; the input state otherwise).
     pub plastic: PlasticState,
     /// Energy the plastic return dissipated in this evaluation (J2 plastic materials).
@@ -151,6 +155,8 @@ pub struct Dissipation {
     pub hourglass_q: [f64; 2],
     /// Bulk-viscosity stress of the previous step.
     pub bulk_p: [f64; 4],
+    /// Its hoop component (axisymmetric elements).
+    pub bulk_hoop: f64,
 }
 
 /// Reference geometry of a quad at its centre: area and shape-function gradients.
@@ -170,6 +176,9 @@ pub struct QuadGeometry {
     pub hourglass_stiffness: f64,
     /// sqrt(b . b) / (gamma . gamma): geometry factor of the viscous hourglass coefficient.
     pub hourglass_viscous: f64,
+    /// Reference radius of the centre (axisymmetric elements; 0 otherwise, see
+    /// [`crate::model::Model::geometry`]).
+    pub radius: f64,
 }
 
 /// Centre gradients and hourglass vector of the quad with corners `x` (counter-clockwise).
@@ -197,6 +206,7 @@ pub fn quad_geometry(x: &[[f64; 2]; 4]) -> QuadGeometry {
         inv_area: 1.0 / area,
         hourglass_stiffness: bb / gg,
         hourglass_viscous: bb.sqrt() / gg,
+        radius: 0.0,
         bx,
         by,
         gamma,
@@ -296,7 +306,16 @@ pub fn evaluate_state(
     dt_prev: f64,
     plastic: &PlasticState,
 ) -> ElementOut {
-    let a0t = g.area * p.thickness;
+    // Axisymmetric: the hoop stretch F_33 = r / R at the centre (N_a = 1/4 there), its rate, and
+    // the volume per radian A0 R instead of A0 t.
+    let axi = p.formulation == Formulation::Axisymmetric;
+    let (f33, f33d, a0t) = if axi {
+        let ur = 0.25 * (u[0][0] + u[1][0] + u[2][0] + u[3][0]);
+        let vr = 0.25 * (v[0][0] + v[1][0] + v[2][0] + v[3][0]);
+        (1.0 + ur / g.radius, vr / g.radius, g.area * g.radius)
+    } else {
+        (1.0, 0.0, g.area * p.thickness)
+    };
     // Deformation gradient F = I + sum_a u_a (x) b_a and its rate.
     let mut f = [1.0, 0.0, 0.0, 1.0];
     let mut fd = [0.0; 4];
@@ -312,19 +331,21 @@ pub fn evaluate_state(
     }
     let j = det(&f);
     // Stress (first Piola-Kirchhoff, xx xy yx yy) and strain energy density.
-    let (pk, w, cauchy, new_plastic, plastic_density) = if p.model == MaterialModel::J2Plastic {
-        let s = j2_stress(p, &f, j, plastic);
+    let (pk, p33, w, cauchy, new_plastic, plastic_density) = if p.model == MaterialModel::J2Plastic
+    {
+        let s = j2_stress(p, &f, j, f33, plastic);
         let mut d = s.dissipated;
         if s.state.alpha > plastic.alpha && dt_prev > 0.0 {
             // F_n = F_{n+1} - dt Fdot with the old state: the start of the step that yielded.
             let f_old: [f64; 4] = std::array::from_fn(|i| f[i] - dt_prev * fd[i]);
-            let (pk_old, w_old) = j2_elastic(p, &f_old, det(&f_old), plastic);
-            d = step_plastic_work(&pk_old, &s.pk, &fd, dt_prev, w_old, s.stored);
+            let f33_old = f33 - dt_prev * f33d;
+            let old = j2_elastic(p, &f_old, det(&f_old), f33_old, plastic);
+            d = step_plastic_work(&old, &s, &fd, f33d, dt_prev);
         }
-        (s.pk, s.stored, s.cauchy, s.state, d)
+        (s.pk, s.p33, s.stored, s.cauchy, s.state, d)
     } else {
-        let (pk, w, cauchy) = stress(p, &f, j);
-        (pk, w, cauchy, *plastic, 0.0)
+        let (pk, w, cauchy, p33) = stress(p, &f, j, f33);
+        (pk, p33, w, cauchy, *plastic, 0.0)
     };
 
     // Current geometry.
@@ -340,6 +361,13 @@ pub fn evaluate_state(
     for a in 0..4 {
         force[a][0] = -a0t * (pk[0] * g.bx[a] + pk[1] * g.by[a]);
         force[a][1] = -a0t * (pk[2] * g.bx[a] + pk[3] * g.by[a]);
+    }
+    if axi {
+        // The hoop stress on u_r: dF_33 / du_r,a = N_a / R = 1 / (4 R).
+        let hoop = 0.25 * a0t * p33 / g.radius;
+        for fa in &mut force {
+            fa[0] -= hoop;
+        }
     }
 
     // Hourglass control (Flanagan-Belytschko), on the reference gamma.
@@ -385,14 +413,15 @@ pub fn evaluate_state(
 
     // Bulk viscosity: pressure q in compression, acting as Cauchy stress -q I.
     let mut bulk_p = [0.0; 4];
+    let mut bulk_hoop = 0.0;
     let mut bulk_work = 0.0;
     let mut dt = length / c;
     if p.has_bulk_viscosity() {
         // Volumetric strain rate tr(Fdot F^-1) (= tr Fdot for the small-strain model).
         let rate = match p.model {
-            MaterialModel::LinearElastic => fd[0] + fd[3],
+            MaterialModel::LinearElastic => fd[0] + fd[3] + f33d,
             MaterialModel::NeoHookean | MaterialModel::J2Plastic => {
-                (fd[0] * f[3] - fd[1] * f[2] - fd[2] * f[1] + fd[3] * f[0]) / j
+                (fd[0] * f[3] - fd[1] * f[2] - fd[2] * f[1] + fd[3] * f[0]) / j + f33d / f33
             }
         };
         // Compression only, and not for round-off rates (rigid motion): the strain rate over one
@@ -401,12 +430,18 @@ pub fn evaluate_state(
             let rho = p.density * g.area / area.abs().max(f64::MIN_POSITIVE);
             let q =
                 rho * length * (p.bulk_quadratic * length * rate * rate - p.bulk_linear * c * rate);
-            bulk_p = match p.model {
-                MaterialModel::LinearElastic => [-q, 0.0, 0.0, -q],
-                // -q J F^-T = -q cof(F)
-                MaterialModel::NeoHookean | MaterialModel::J2Plastic => {
-                    [-q * f[3], q * f[2], q * f[1], -q * f[0]]
-                }
+            (bulk_p, bulk_hoop) = match p.model {
+                MaterialModel::LinearElastic => ([-q, 0.0, 0.0, -q], if axi { -q } else { 0.0 }),
+                // -q J F^-T: in plane -q F_33 cof(F), hoop -q det(F) (J = det(F) F_33).
+                MaterialModel::NeoHookean | MaterialModel::J2Plastic => (
+                    [
+                        -q * f33 * f[3],
+                        q * f33 * f[2],
+                        q * f33 * f[1],
+                        -q * f33 * f[0],
+                    ],
+                    if axi { -q * j } else { 0.0 },
+                ),
             };
         }
         // Stable step with the viscosity: the linear part always (so that dt does not jump when
@@ -417,6 +452,12 @@ pub fn evaluate_state(
             force[a][0] -= a0t * (bulk_p[0] * g.bx[a] + bulk_p[1] * g.by[a]);
             force[a][1] -= a0t * (bulk_p[2] * g.bx[a] + bulk_p[3] * g.by[a]);
         }
+        if axi {
+            let hoop = 0.25 * a0t * bulk_hoop / g.radius;
+            for fa in &mut force {
+                fa[0] -= hoop;
+            }
+        }
         // Dissipated: 1/2 A0 t (P^{n-1} + P^n) : dH, dH = dt_prev Fdot.
         bulk_work = 0.5
             * a0t
@@ -424,7 +465,8 @@ pub fn evaluate_state(
             * ((prev.bulk_p[0] + bulk_p[0]) * fd[0]
                 + (prev.bulk_p[1] + bulk_p[1]) * fd[1]
                 + (prev.bulk_p[2] + bulk_p[2]) * fd[2]
-                + (prev.bulk_p[3] + bulk_p[3]) * fd[3]);
+                + (prev.bulk_p[3] + bulk_p[3]) * fd[3]
+                + (prev.bulk_hoop + bulk_hoop) * f33d);
     }
 
     ElementOut {
@@ -434,42 +476,51 @@ pub fn evaluate_state(
         hourglass_stored,
         hourglass_q,
         bulk_p,
+        bulk_hoop,
         hourglass_work,
         bulk_work,
         min_corner,
         stress: cauchy,
         def_grad: f,
+        hoop_stretch: f33,
         plastic: new_plastic,
         plastic_work: plastic_density * a0t,
     }
 }
 
-/// First Piola-Kirchhoff stress (xx xy yx yy), strain energy per reference volume, and the Cauchy
-/// stress (xx yy xy zz) for the deformation gradient `f` with determinant `j` (a J2 plastic
-/// material from the virgin state: see [`evaluate_state`] for a yielded one).
+/// First Piola-Kirchhoff stress (xx xy yx yy), strain energy per reference volume, the Cauchy
+/// stress (xx yy xy zz) and the out-of-plane first Piola-Kirchhoff stress P_33 for the in-plane
+/// deformation gradient `f` with determinant `j` and the out-of-plane stretch `f33` (used by
+/// axisymmetric bodies: r / R; 1 otherwise). A J2 plastic material from the virgin state: see
+/// [`evaluate_state`] for a yielded one.
 #[inline(always)]
-pub fn stress(p: &ElementParams, f: &[f64; 4], j: f64) -> ([f64; 4], f64, [f64; 4]) {
+pub fn stress(p: &ElementParams, f: &[f64; 4], j: f64, f33: f64) -> ([f64; 4], f64, [f64; 4], f64) {
     match p.model {
         MaterialModel::LinearElastic => {
             let exx = f[0] - 1.0;
             let eyy = f[3] - 1.0;
             let exy = 0.5 * (f[1] + f[2]);
-            let tr = exx + eyy;
+            // The hoop strain u_r / R (axisymmetric; 0 in plane strain, free in plane stress).
+            let ezz = f33 - 1.0;
+            let tr = exx + eyy + ezz;
             let sxx = p.lambda_plane * tr + 2.0 * p.mu * exx;
             let syy = p.lambda_plane * tr + 2.0 * p.mu * eyy;
             let sxy = 2.0 * p.mu * exy;
             let szz = match p.formulation {
                 Formulation::PlaneStrain => p.lambda * tr,
                 Formulation::PlaneStress => 0.0,
+                Formulation::Axisymmetric => p.lambda * tr + 2.0 * p.mu * ezz,
             };
-            let w = 0.5 * (sxx * exx + syy * eyy + 2.0 * sxy * exy);
-            ([sxx, sxy, sxy, syy], w, [sxx, syy, sxy, szz])
+            let w = 0.5 * (sxx * exx + syy * eyy + 2.0 * sxy * exy + szz * ezz);
+            ([sxx, sxy, sxy, syy], w, [sxx, syy, sxy, szz], szz)
         }
         MaterialModel::NeoHookean => {
-            // F33 = 1 (plane strain) or from sigma_33 = 0 (plane stress, Newton on ln-form).
+            // F33 = 1 (plane strain), from sigma_33 = 0 (plane stress, Newton on ln-form) or
+            // r / R (axisymmetric, given).
             let f33 = match p.formulation {
                 Formulation::PlaneStrain => 1.0,
                 Formulation::PlaneStress => plane_stress_stretch(p.lambda, p.mu, j),
+                Formulation::Axisymmetric => f33,
             };
             let jj = j * f33;
             let ln_j = jj.ln();
@@ -483,15 +534,17 @@ pub fn stress(p: &ElementParams, f: &[f64; 4], j: f64) -> ([f64; 4], f64, [f64; 
             let sxx = (pk[0] * f[0] + pk[1] * f[1]) / jj;
             let sxy = (pk[0] * f[2] + pk[1] * f[3]) / jj;
             let syy = (pk[2] * f[2] + pk[3] * f[3]) / jj;
-            let szz = match p.formulation {
-                Formulation::PlaneStrain => p.lambda * ln_j / jj,
+            // P_33 = mu (F_33 - 1 / F_33) + lambda ln J / F_33; sigma_33 = P_33 F_33 / J.
+            let p33 = match p.formulation {
                 Formulation::PlaneStress => 0.0,
+                _ => p.mu * (f33 - 1.0 / f33) + p.lambda * ln_j / f33,
             };
-            (pk, w, [sxx, syy, sxy, szz])
+            let szz = p33 * f33 / jj;
+            (pk, w, [sxx, syy, sxy, szz], p33)
         }
         MaterialModel::J2Plastic => {
-            let s = j2_stress(p, f, j, &PlasticState::VIRGIN);
-            (s.pk, s.stored, s.cauchy)
+            let s = j2_stress(p, f, j, f33, &PlasticState::VIRGIN);
+            (s.pk, s.stored, s.cauchy, s.p33)
         }
     }
 }
@@ -559,8 +612,8 @@ mod tests {
         );
         let e = 1e-6;
         let f = [1.0 + e, 0.3 * e, 0.3 * e, 1.0 - 0.5 * e];
-        let (pk, _, _) = stress(&p, &f, det(&f));
-        let (pkl, _, _) = stress(&pl, &f, det(&f));
+        let (pk, _, _, _) = stress(&p, &f, det(&f), 1.0);
+        let (pkl, _, _, _) = stress(&pl, &f, det(&f), 1.0);
         for i in 0..4 {
             assert!(
                 (pk[i] - pkl[i]).abs() < 1e-4 * 210e9 * e,

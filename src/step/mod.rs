@@ -252,6 +252,14 @@ pub trait Solver {
     /// A failed device readback.
     fn displacement_now(&mut self) -> Result<Vec<[f64; 2]>>;
 
+    /// The plastic state of every element now (empty without a J2 plastic material).
+    ///
+    /// # Errors
+    /// A failed device readback.
+    fn plastic_now(&mut self) -> Result<Vec<plastic::PlasticState>> {
+        Ok(Vec::new())
+    }
+
     /// Advances at least one step, until one or more events happened (or, without one, for about
     /// [`ADVANCE_SECONDS`]), and appends them.
     ///

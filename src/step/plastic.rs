@@ -16,8 +16,8 @@
 //! - at small strain it is the small-strain radial return (REFERENCES.md section 10), and the
 //!   return itself is the closed form of linear hardening: no iteration.
 //!
-//! Plane strain (F_zz = 1): the state is C_p^-1 (xx, yy, xy, zz) and the equivalent plastic
-//! strain alpha. The stress is the Kirchhoff stress tau = K ln J I + 2 mu dev ln V_e on the return
+//! Plane strain (F_zz = 1) and axisymmetric (F_zz = r / R, the hoop stretch): the state is
+//! C_p^-1 (xx, yy, xy, zz) and the equivalent plastic strain alpha. The stress is the Kirchhoff stress tau = K ln J I + 2 mu dev ln V_e on the return
 //! mapped strain; the Cauchy stress is tau / J and the first Piola-Kirchhoff stress tau F^-T.
 //! The yield condition is on the Cauchy (true) stress, sigma_vm = tau_vm / J <= sigma_y + H alpha,
 //! as a tensile test measures it (on the Kirchhoff stress the yield stress would drift by the
@@ -54,6 +54,8 @@ impl Default for PlasticState {
 pub struct J2Stress {
     /// First Piola-Kirchhoff stress (xx, xy, yx, yy).
     pub pk: [f64; 4],
+    /// Its out-of-plane (hoop) component P_33 = tau_33 / F_33.
+    pub p33: f64,
     /// Cauchy stress (xx, yy, xy, zz).
     pub cauchy: [f64; 4],
     /// Stored (elastic) energy per reference volume after the return.
@@ -88,58 +90,60 @@ fn compose(a: f64, b: f64, c: f64, s: f64) -> [f64; 3] {
     ]
 }
 
-/// Stress and new state of a plane-strain J2 element with deformation gradient `f`
-/// (xx, xy, yx, yy), determinant `j`, previous state `old` (see the module documentation).
+/// Stress and new state of a J2 element with in-plane deformation gradient `f` (xx, xy, yx,
+/// yy), its determinant `j`, the out-of-plane stretch `f33` (1 in plane strain, r / R in an
+/// axisymmetric body) and the previous state `old` (see the module documentation).
 #[inline(always)]
-pub fn j2_stress(p: &ElementParams, f: &[f64; 4], j: f64, old: &PlasticState) -> J2Stress {
-    j2_update(p, f, j, old, true)
+pub fn j2_stress(
+    p: &ElementParams,
+    f: &[f64; 4],
+    j: f64,
+    f33: f64,
+    old: &PlasticState,
+) -> J2Stress {
+    j2_update(p, f, j, f33, old, true)
 }
 
-/// The elastic response of the state `state` at `f` (no return): first Piola-Kirchhoff stress
-/// (xx, xy, yx, yy) and stored energy per reference volume.
+/// The elastic response of the state `state` at (`f`, `f33`), with no return.
 #[inline(always)]
 pub fn j2_elastic(
     p: &ElementParams,
     f: &[f64; 4],
     j: f64,
+    f33: f64,
     state: &PlasticState,
-) -> ([f64; 4], f64) {
-    let s = j2_update(p, f, j, state, false);
-    (s.pk, s.stored)
+) -> J2Stress {
+    j2_update(p, f, j, f33, state, false)
 }
 
 /// The plastic work of a step that yielded, per reference volume: the work of the stress over
-/// the step, by the trapezoidal rule on the first Piola-Kirchhoff stresses at its two ends
-/// (`pk_old` at the start, from the old state; `pk` at the end, returned) and the rate `fd` of
-/// F over it, `dt` long, less the change of the stored energy (`w_old` to `w`). This is the part
-/// of the internal work that the stored energy does not hold, so that the energy audit of a run
-/// closes to round-off on the steps that yield, as it closes to second order on elastic ones
+/// the step, `dt` long, by the trapezoidal rule on the first Piola-Kirchhoff stresses at its two
+/// ends (`old` at the start, from the old state; `new` at the end, returned; `fd` and `f33d` the
+/// rates of F and F_33), less the change of the stored energy. This is the part of the internal
+/// work that the stored energy does not hold, so that the energy audit of a run closes to
+/// round-off on the steps that yield, as it closes to second order on elastic ones
 /// (W(trial) - W(returned) alone leaves an error of first order in the step).
 #[inline(always)]
-pub fn step_plastic_work(
-    pk_old: &[f64; 4],
-    pk: &[f64; 4],
-    fd: &[f64; 4],
-    dt: f64,
-    w_old: f64,
-    w: f64,
-) -> f64 {
-    let mut work = 0.0;
+pub fn step_plastic_work(old: &J2Stress, new: &J2Stress, fd: &[f64; 4], f33d: f64, dt: f64) -> f64 {
+    let mut work = (old.p33 + new.p33) * f33d;
     for i in 0..4 {
-        work += (pk_old[i] + pk[i]) * fd[i];
+        work += (old.pk[i] + new.pk[i]) * fd[i];
     }
-    0.5 * dt * work - (w - w_old)
+    0.5 * dt * work - (new.stored - old.stored)
 }
 
 #[inline(always)]
 fn j2_update(
     p: &ElementParams,
     f: &[f64; 4],
-    j: f64,
+    j2: f64,
+    f33: f64,
     old: &PlasticState,
     allow_return: bool,
 ) -> J2Stress {
     let [c0, c1, c2, c3] = old.cp_inv;
+    // The volume ratio.
+    let j = j2 * f33;
     // Trial b_e = F C_p^-1 F^T (in plane; b_zz = C_p^-1 zz since F_zz = 1).
     let fc00 = f[0] * c0 + f[1] * c2;
     let fc01 = f[0] * c2 + f[1] * c1;
@@ -150,7 +154,8 @@ fn j2_update(
     let byy = fc10 * f[2] + fc11 * f[3];
     let (l1, l2, cs, sn) = principal(bxx, byy, bxy);
     // Logarithmic elastic strains, their volume and deviatoric parts.
-    let eps = [0.5 * l1.ln(), 0.5 * l2.ln(), 0.5 * c3.ln()];
+    // b_zz = F_33^2 C_p^-1 zz.
+    let eps = [0.5 * l1.ln(), 0.5 * l2.ln(), 0.5 * c3.ln() + f33.ln()];
     let ev = eps[0] + eps[1] + eps[2];
     let mut e = eps.map(|x| x - ev / 3.0);
     let e2_trial = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
@@ -173,8 +178,8 @@ fn j2_update(
         let b2 = (2.0 * (e[1] + ev / 3.0)).exp();
         let b3 = (2.0 * (e[2] + ev / 3.0)).exp();
         let [nxx, nyy, nxy] = compose(b1, b2, cs, sn);
-        // F^-1 = [f3 -f1; -f2 f0] / j.
-        let (i00, i01, i10, i11) = (f[3] / j, -f[1] / j, -f[2] / j, f[0] / j);
+        // F^-1 = [f3 -f1; -f2 f0] / det F (in plane), 1 / F_33 out of plane.
+        let (i00, i01, i10, i11) = (f[3] / j2, -f[1] / j2, -f[2] / j2, f[0] / j2);
         let t00 = i00 * nxx + i01 * nxy;
         let t01 = i00 * nxy + i01 * nyy;
         let t10 = i10 * nxx + i11 * nxy;
@@ -183,15 +188,15 @@ fn j2_update(
             t00 * i00 + t01 * i01,
             t10 * i10 + t11 * i11,
             t00 * i10 + t01 * i11,
-            b3,
+            b3 / (f33 * f33),
         ];
     }
     let k = p.bulk_modulus;
     let stored = 0.5 * k * ev * ev + mu * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
     let tau = e.map(|x| 2.0 * mu * x + k * ev);
     let [txx, tyy, txy] = compose(tau[0], tau[1], cs, sn);
-    // P = tau F^-T, F^-T = [f3 -f2; -f1 f0] / j.
-    let (m00, m01, m10, m11) = (f[3] / j, -f[2] / j, -f[1] / j, f[0] / j);
+    // P = tau F^-T, F^-T = [f3 -f2; -f1 f0] / det F in plane.
+    let (m00, m01, m10, m11) = (f[3] / j2, -f[2] / j2, -f[1] / j2, f[0] / j2);
     let pk = [
         txx * m00 + txy * m10,
         txx * m01 + txy * m11,
@@ -200,6 +205,7 @@ fn j2_update(
     ];
     J2Stress {
         pk,
+        p33: tau[2] / f33,
         cauchy: [txx / j, tyy / j, txy / j, tau[2] / j],
         stored,
         dissipated,
@@ -260,7 +266,7 @@ mod tests {
         let p = copper();
         let e = 1e-6;
         let f = [1.0 + e, 0.4 * e, 0.4 * e, 1.0 - 0.3 * e];
-        let s = j2_stress(&p, &f, det(&f), &PlasticState::VIRGIN);
+        let s = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN);
         assert_eq!(s.state, PlasticState::VIRGIN);
         assert_eq!(s.dissipated, 0.0);
         let tr = f[0] + f[3] - 2.0;
@@ -277,7 +283,7 @@ mod tests {
     fn the_return_lands_on_the_hardened_yield_surface_and_dissipates() {
         let p = copper();
         let f = [1.0, 0.0, 0.0, 0.98];
-        let s = j2_stress(&p, &f, det(&f), &PlasticState::VIRGIN);
+        let s = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN);
         assert!(s.state.alpha > 0.0 && s.dissipated > 0.0);
         let flow = p.yield_stress + p.hardening * s.state.alpha;
         // Cauchy von Mises = flow stress exactly.
@@ -287,7 +293,7 @@ mod tests {
         assert!(((c[0] * c[1] - c[2] * c[2]) * c[3] - 1.0).abs() < 1e-12);
         // Re-evaluating at the same F from the new state gives the same state and stress (to
         // round-off: the trial then lies on the yield surface).
-        let again = j2_stress(&p, &f, det(&f), &s.state);
+        let again = j2_stress(&p, &f, det(&f), 1.0, &s.state);
         assert!((again.state.alpha - s.state.alpha).abs() < 1e-14);
         assert!(again.dissipated < 1e-12 * s.dissipated);
         for i in 0..4 {
@@ -299,11 +305,11 @@ mod tests {
     fn a_rigid_rotation_leaves_the_state_and_the_rotated_stress_unchanged() {
         let p = copper();
         let g = [1.01, 0.02, -0.01, 0.97];
-        let a = j2_stress(&p, &g, det(&g), &PlasticState::VIRGIN);
+        let a = j2_stress(&p, &g, det(&g), 1.0, &PlasticState::VIRGIN);
         assert!(a.state.alpha > 0.0);
         for angle in [0.3, 1.2, std::f64::consts::PI, -2.5] {
             let f = rotate(angle, &g);
-            let b = j2_stress(&p, &f, det(&f), &PlasticState::VIRGIN);
+            let b = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN);
             assert!((b.state.alpha - a.state.alpha).abs() < 1e-14);
             for i in 0..4 {
                 assert!(

@@ -66,6 +66,19 @@ pub struct CaseInfo {
     /// The metric drawn in the plot (default: the first).
     #[serde(default)]
     pub plot: Option<String>,
+    /// The backends that run the case (default both): `["cpu"]` for a case whose model the GPU
+    /// backend does not run yet (the report says so).
+    #[serde(default)]
+    pub backends: Option<Vec<String>>,
+}
+
+impl CaseInfo {
+    /// Whether `backend` ("cpu" or "gpu") runs the case.
+    pub fn runs_on(&self, backend: &str) -> bool {
+        self.backends
+            .as_ref()
+            .is_none_or(|b| b.iter().any(|x| x == backend))
+    }
 }
 
 fn default_methods() -> Vec<String> {
@@ -123,6 +136,24 @@ pub enum MetricKind {
     /// the mean length along the wall of the two surface segments that straddle the edges of the
     /// loaded zone (from the outermost loaded node to the next surface node).
     EdgeError,
+    /// Extent of `body` along `component` at the end: largest minus smallest current coordinate
+    /// of its nodes (m; the final length of a Taylor bar).
+    Extent,
+    /// Largest current coordinate of the nodes of `body` along `component` at the end (m; the
+    /// impact-face radius of a Taylor bar).
+    MaxCoordinate,
+    /// Largest equivalent plastic strain of the elements of `body` at the end.
+    PeakPlasticStrain,
+    /// Thick cylinder under internal pressure (`lame = [a, b, p]`): the largest error of the
+    /// radial and hoop stress at the element centres of `body` at the end against the closed form
+    /// at the centres' radii (Pa; REFERENCES.md section 9).
+    LameStressError,
+    /// The same for the radial displacement of the nodes (m).
+    LameDisplacementError,
+    /// Uniaxial plane strain of a J2 body along y (REFERENCES.md section 10): the largest
+    /// |sigma_vm - closed form| over the elements of `body` at the end (Pa), at the strain
+    /// 1 - (extent along y) / (reference extent).
+    UniaxialJ2Error,
 }
 
 /// A bound value: a number, or an expression over the run's variables (e.g. `"0.9 / n"`).
@@ -239,6 +270,10 @@ pub struct Metric {
     /// Reference contact half-width (m) for `edge_error`.
     #[serde(default)]
     pub half_width: Option<f64>,
+    /// Inner radius, outer radius and internal pressure [a, b, p] (m, m, Pa) for the Lame
+    /// metrics.
+    #[serde(default)]
+    pub lame: Option<[f64; 3]>,
 }
 
 impl Metric {
@@ -335,6 +370,13 @@ impl Case {
                     }
                 }
                 K::StressError => need("stress", m.stress.is_some())?,
+                K::Extent | K::MaxCoordinate | K::PeakPlasticStrain | K::UniaxialJ2Error => {
+                    need("body", m.body.is_some())?
+                }
+                K::LameStressError | K::LameDisplacementError => {
+                    need("body", m.body.is_some())?;
+                    need("lame", m.lame.is_some())?
+                }
                 K::ContactEnergyRatio | K::EnergyDrift | K::EnergyBalance | K::KineticRatio => {}
             }
             if let Some(c) = &m.component {

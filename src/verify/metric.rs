@@ -6,9 +6,10 @@ use std::collections::BTreeMap;
 use super::case::{eval, Metric, MetricKind};
 use crate::contact::surface::Surface;
 use crate::model::Model;
-use crate::output::fields::element_fields;
+use crate::output::fields::{element_fields, element_fields_state};
 use crate::scene::RigidWall;
-use crate::step::element::{evaluate, Dissipation};
+use crate::step::element::{evaluate_with, Dissipation};
+use crate::step::plastic::PlasticState;
 use crate::step::Sample;
 
 /// A surface node touches a rigid wall when its distance to the wall is below this fraction of
@@ -59,8 +60,9 @@ pub fn contact_pressures(
     for e in b.elements.clone() {
         let q = model.quads[e];
         let ue = q.map(|i| u[i as usize]);
-        let out = evaluate(
+        let out = evaluate_with(
             model.params(e),
+            &model.geometry(e),
             &model.corners[e],
             &ue,
             &[[0.0; 2]; 4],
@@ -137,6 +139,8 @@ pub struct RunData<'a> {
     pub contacts: &'a [String],
     /// The run's variables (case and level).
     pub vars: &'a BTreeMap<String, f64>,
+    /// The plastic state of every element at the end (empty without a J2 plastic material).
+    pub plastic: &'a [crate::step::plastic::PlasticState],
 }
 
 /// The value of `m` for a run, or why it cannot be measured.
@@ -277,6 +281,106 @@ pub fn measure(m: &Metric, r: &RunData<'_>) -> std::result::Result<f64, String> 
                     (a - a_ref) / h
                 }
             }
+        }
+        MetricKind::Extent | MetricKind::MaxCoordinate => {
+            let b = &r.model.bodies[body()?];
+            let x = |n: usize| r.model.position[n][comp] + r.displacement[n][comp];
+            let hi = b.nodes.clone().map(x).fold(f64::NEG_INFINITY, f64::max);
+            let lo = b.nodes.clone().map(x).fold(f64::INFINITY, f64::min);
+            if m.kind == MetricKind::Extent {
+                hi - lo
+            } else {
+                hi
+            }
+        }
+        MetricKind::PeakPlasticStrain => {
+            let b = &r.model.bodies[body()?];
+            if r.plastic.is_empty() {
+                return Err("the run has no plastic state".into());
+            }
+            b.elements
+                .clone()
+                .map(|e| r.plastic[e].alpha)
+                .fold(0.0, f64::max)
+        }
+        MetricKind::LameStressError | MetricKind::LameDisplacementError => {
+            let [a, bo, p] = m.lame.ok_or("no lame = [a, b, p]")?;
+            let b = &r.model.bodies[body()?];
+            let (aa, bb) = (
+                p * a * a / (bo * bo - a * a),
+                p * a * a * bo * bo / (bo * bo - a * a),
+            );
+            let mut err = 0.0f64;
+            if m.kind == MetricKind::LameStressError {
+                for e in b.elements.clone() {
+                    let q = r.model.quads[e];
+                    let rc = 0.25
+                        * q.iter()
+                            .map(|&n| {
+                                r.model.position[n as usize][0] + r.displacement[n as usize][0]
+                            })
+                            .sum::<f64>();
+                    let s = element_fields_state(
+                        r.model,
+                        r.displacement,
+                        e,
+                        r.plastic.get(e).unwrap_or(&PlasticState::VIRGIN),
+                    )
+                    .stress;
+                    err = err
+                        .max((s[0] - (aa - bb / (rc * rc))).abs())
+                        .max((s[3] - (aa + bb / (rc * rc))).abs());
+                }
+            } else {
+                let pr = &b.params;
+                let e_mod = pr.mu * (3.0 * pr.lambda + 2.0 * pr.mu) / (pr.lambda + pr.mu);
+                let nu = pr.lambda / (2.0 * (pr.lambda + pr.mu));
+                for n in b.nodes.clone() {
+                    let x = r.model.position[n][0];
+                    let ur = (1.0 + nu) / e_mod * ((1.0 - 2.0 * nu) * aa * x + bb / x);
+                    err = err.max((r.displacement[n][0] - ur).abs());
+                }
+            }
+            err
+        }
+        MetricKind::UniaxialJ2Error => {
+            let b = &r.model.bodies[body()?];
+            let pr = &b.params;
+            let y = |n: usize, u: bool| {
+                r.model.position[n][1] + if u { r.displacement[n][1] } else { 0.0 }
+            };
+            let ext = |u: bool| {
+                let hi = b
+                    .nodes
+                    .clone()
+                    .map(|n| y(n, u))
+                    .fold(f64::NEG_INFINITY, f64::max);
+                let lo = b
+                    .nodes
+                    .clone()
+                    .map(|n| y(n, u))
+                    .fold(f64::INFINITY, f64::min);
+                hi - lo
+            };
+            let x = (1.0 - ext(true) / ext(false)).abs();
+            let first = pr.yield_stress / (2.0 * pr.mu);
+            let closed = if x <= first {
+                2.0 * pr.mu * x
+            } else {
+                pr.yield_stress
+                    + 2.0 * pr.mu * pr.hardening / (3.0 * pr.mu + pr.hardening) * (x - first)
+            };
+            let mut err = 0.0f64;
+            for e in b.elements.clone() {
+                let f = element_fields_state(
+                    r.model,
+                    r.displacement,
+                    e,
+                    r.plastic.get(e).unwrap_or(&PlasticState::VIRGIN),
+                );
+                err = err.max((f.von_mises - closed).abs());
+            }
+            err
         }
     })
 }

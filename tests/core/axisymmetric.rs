@@ -1,0 +1,122 @@
+//! The axisymmetric formulation (x = r, y the axis; per radian): the constant-strain patch test
+//! with the hoop strain, the lumped masses per radian, the nodes on the axis held at u_r = 0
+//! without a boundary table, and the refused inputs. The thick cylinder (Lame) and the Taylor bar
+//! are verification cases (`assets/verification/`).
+
+use ricochet::output::fields::element_fields;
+
+use crate::common::*;
+
+const RHO: f64 = 7850.0;
+
+fn scene(origin_x: f64, extra: &str) -> String {
+    format!(
+        r#"
+[run]
+end_time = 1.0e-6
+
+[[material]]
+name = "steel"
+model = "linear_elastic"
+density = {RHO}
+youngs_modulus = 2.1e11
+poisson_ratio = 0.3
+
+[[body]]
+name = "tube"
+material = "steel"
+formulation = "axisymmetric"
+mesh = {{ rectangle = {{ origin = [{origin_x:e}, 0.0], size = [0.05, 0.02], cells = [5, 3] }} }}
+{extra}
+"#
+    )
+}
+
+#[test]
+fn a_uniform_expansion_gives_the_exact_hoop_stress_and_the_masses_are_per_radian() {
+    let (_, model, _) = build(&scene(0.05, ""));
+    // Mass per radian: rho * integral of r dA = rho (b^2 - a^2) / 2 * h.
+    let total: f64 = model.mass.iter().sum();
+    let exact = RHO * (0.1f64.powi(2) - 0.05f64.powi(2)) / 2.0 * 0.02;
+    assert!(
+        (total - exact).abs() < 1e-12 * exact,
+        "{total} against {exact}"
+    );
+    // u_r = er r, u_z = ez z: F = diag(1 + er, 1 + ez), F_33 = 1 + er in every element.
+    let (er, ez) = (1.0e-4, -3.0e-4);
+    let u: Vec<[f64; 2]> = model
+        .position
+        .iter()
+        .map(|p| [er * p[0], ez * p[1]])
+        .collect();
+    let e = 2.1e11;
+    let nu = 0.3;
+    let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    let mu = e / (2.0 * (1.0 + nu));
+    let tr = 2.0 * er + ez;
+    let want = [
+        lambda * tr + 2.0 * mu * er,
+        lambda * tr + 2.0 * mu * ez,
+        0.0,
+        lambda * tr + 2.0 * mu * er,
+    ];
+    for el in 0..model.element_count() {
+        let s = element_fields(&model, &u, el).stress;
+        for i in 0..4 {
+            assert!(
+                (s[i] - want[i]).abs() < 1e-10 * want[0].abs(),
+                "element {el}, component {i}: {} against {}",
+                s[i],
+                want[i]
+            );
+        }
+    }
+}
+
+#[test]
+fn nodes_on_the_axis_are_held_at_zero_radial_velocity() {
+    let (_, model, _) = build(&scene(0.0, "initial_velocity = [5.0, -3.0]"));
+    let on_axis: Vec<usize> = (0..model.node_count())
+        .filter(|&n| model.position[n][0] == 0.0)
+        .collect();
+    assert_eq!(on_axis.len(), 4);
+    for n in on_axis {
+        let c = model
+            .constraints
+            .iter()
+            .find(|c| c.node as usize == n)
+            .expect("axis node constrained");
+        assert_eq!(c.vx, Some(0.0));
+        assert_eq!(c.vy, None);
+        assert_eq!(model.velocity[n], [0.0, -3.0]);
+    }
+    // Off the axis, no constraint.
+    assert_eq!(model.constraints.len(), 4);
+}
+
+#[test]
+fn bad_axisymmetric_input_is_refused() {
+    let dir = tmp_dir("axi-bad");
+    for (case, text, needles) in [
+        (
+            "negative_x",
+            scene(-0.01, ""),
+            vec!["body[0].mesh", "x = r >= 0"],
+        ),
+        (
+            "thickness",
+            scene(0.05, "thickness = 0.01"),
+            vec!["body[0].thickness", "per radian"],
+        ),
+    ] {
+        let file = dir.join(format!("{case}.toml"));
+        std::fs::write(&file, text).unwrap();
+        let o = run_bin(&["check", file.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{case}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{case}: {n:?} not in {err}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
