@@ -22,7 +22,7 @@ struct Params {
     penalty_dt: f32,      // stable step of the penalty springs alone (0: none)
     mass_damping: f32,    // alpha of run.mass_damping (0: none)
     loads: u32,           // 1: pressure or damping work is summed (sample_src after the constraints)
-    _p2: u32,
+    plastic: u32,         // 1: J2 plastic work is summed (sample_src after the loads) into word 9
 }
 
 // Run control, advanced on the GPU so that a step needs no readback.

@@ -189,11 +189,16 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     if ((flags & FLAG_SAMPLE) != 0u) {
         let base = (ctrl.rows % params.row_capacity) * params.row_stride;
         var ke = 0.0;
+        // The plastic work (word 9) comes before the bodies' words in a plastic scene.
+        let bw = base + 9u + params.plastic;
         for (var b = 0u; b < nb; b++) {
             ke += inst_res[b].x;
             let v = inst_res[b].yz * instances[b].scale;
-            history[base + 9u + 2u * b] = v.x;
-            history[base + 10u + 2u * b] = v.y;
+            history[bw + 2u * b] = v.x;
+            history[bw + 1u + 2u * b] = v.y;
+        }
+        if (params.plastic != 0u) {
+            history[base + 9u] = inst_res[params.n_instances - 1u].x;
         }
         let el = inst_res[nb];
         var ext = 0.0;

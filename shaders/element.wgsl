@@ -2,8 +2,8 @@
 // Mirrors ricochet::step::element::evaluate (the f64 CPU reference) line by line in f32.
 
 struct Body {
-    model: u32,           // 0 linear elastic, 1 neo-Hookean
-    formulation: u32,     // 0 plane strain, 1 plane stress
+    model: u32,           // 0 linear elastic, 1 neo-Hookean, 2 J2 plastic
+    formulation: u32,     // 0 plane strain, 1 plane stress, 2 axisymmetric
     hourglass: u32,       // 0 none, 1 viscous, 2 stiffness
     _pad0: u32,
     density: f32,
@@ -16,8 +16,8 @@ struct Body {
     bulk_linear: f32,
     bulk_quadratic: f32,
     mass: f32,
-    _pad1: f32,
-    _pad2: f32,
+    yield_stress: f32,    // J2: sigma_y
+    hardening: f32,       // J2: H
 }
 
 struct Element {
@@ -25,7 +25,7 @@ struct Element {
     c23: vec4<f32>,       // corners 2,3
     nodes: vec4<u32>,
     body: u32,
-    _p0: u32,
+    radius: f32,          // axisymmetric: reference radius of the centre
     _p1: u32,
     _p2: u32,
 }
@@ -41,8 +41,20 @@ override WG: u32 = 64u;
 @group(0) @binding(6) var<storage, read_write> ctrl: Control;
 @group(0) @binding(7) var<storage, read_write> sample_src: array<vec4<f32>>;
 //#if dissipation
-// (Q_x, Q_y, hourglass work, bulk work), (bulk P xx xy yx yy) per element
+// (Q_x, Q_y, hourglass work, bulk work), (bulk P xx xy yx yy) per element, and with the
+// axisymmetric variant (bulk P_33, 0, 0, 0)
 @group(0) @binding(8) var<storage, read_write> elem_state: array<vec4<f32>>;
+//#endif
+//#if plastic
+// J2: (C_p^-1 - I: xx, yy, xy, zz), (alpha, plastic work so far, 0, 0) per element
+@group(0) @binding(9) var<storage, read_write> plastic_state: array<vec4<f32>>;
+//#endif
+
+// Words per element of the dissipative state.
+//#if axisymmetric
+const ES: u32 = 3u;
+//#else
+const ES: u32 = 2u;
 //#endif
 
 // x - ln(1 + x), accurate for small x.
@@ -55,6 +67,111 @@ fn x_minus_log1p(x: f32) -> f32 {
 
 fn log1p(x: f32) -> f32 {
     return x - x_minus_log1p(x);
+}
+
+// exp(x) - 1, accurate for small x.
+fn expm1(x: f32) -> f32 {
+    if (abs(x) < 1e-2) {
+        return x * (1.0 + x * (0.5 + x * (1.0 / 6.0 + x * (1.0 / 24.0 + x / 120.0))));
+    }
+    return exp(x) - 1.0;
+}
+
+// J2 plasticity at finite strain (CPU reference: ricochet::step::plastic): Hencky elasticity on
+// b_e = F C_p^-1 F^T, radial return in logarithmic strain on its principal axes, yield on the
+// Cauchy stress. Kept as deviations from I (b_e - I, C_p^-1 - I, F - I) so that f32 keeps the
+// small strains.
+struct J2 {
+    pk: vec4<f32>,        // first Piola-Kirchhoff xx xy yx yy
+    p33: f32,
+    cauchy: vec4<f32>,    // xx yy xy zz
+    stored: f32,          // per reference volume
+    dev: vec4<f32>,       // C_p^-1 - I after the step (xx yy xy zz)
+    alpha: f32,
+    yielded: bool,
+}
+
+// Symmetric (xx, yy, xy) with principal values a, b on the axes (c, s).
+fn compose(a: f32, b: f32, c: f32, s: f32) -> vec3<f32> {
+    return vec3<f32>(a * c * c + b * s * s, a * s * s + b * c * c, (a - b) * c * s);
+}
+
+// h = F - I (xx xy yx yy), jm1 = det F - 1 (in plane), zm1 = F_33 - 1, d = C_p^-1 - I.
+fn j2_update(bd: Body, h: vec4<f32>, jm1: f32, zm1: f32, d: vec4<f32>, alpha: f32, allow: bool) -> J2 {
+    let f = h + vec4<f32>(1.0, 0.0, 0.0, 1.0);
+    // b - I = (F F^T - I) + F D F^T.
+    let fd00 = f.x * d.x + f.y * d.z;
+    let fd01 = f.x * d.z + f.y * d.y;
+    let fd10 = f.z * d.x + f.w * d.z;
+    let fd11 = f.z * d.z + f.w * d.y;
+    let bxx = 2.0 * h.x + h.x * h.x + h.y * h.y + fd00 * f.x + fd01 * f.y;
+    let byy = 2.0 * h.w + h.z * h.z + h.w * h.w + fd10 * f.z + fd11 * f.w;
+    let bxy = h.z + h.y + h.x * h.z + h.y * h.w + fd00 * f.z + fd01 * f.w;
+    let m = 0.5 * (bxx + byy);
+    let dd = 0.5 * (bxx - byy);
+    let r = sqrt(dd * dd + bxy * bxy);
+    let theta = 0.5 * atan2(bxy, dd);
+    let cs = cos(theta);
+    let sn = sin(theta);
+    let eps = vec3<f32>(0.5 * log1p(m + r), 0.5 * log1p(m - r), 0.5 * log1p(d.w) + log1p(zm1));
+    let ev = eps.x + eps.y + eps.z;
+    var e = eps - vec3<f32>(ev / 3.0);
+    let e2_trial = dot(e, e);
+    let mu = bd.mu;
+    let q = 2.0 * mu * sqrt(1.5 * e2_trial);
+    let j = (1.0 + jm1) * (1.0 + zm1);
+    let flow = bd.yield_stress + bd.hardening * alpha;
+    var out: J2;
+    out.dev = d;
+    out.alpha = alpha;
+    out.yielded = false;
+    if (allow && q > j * flow) {
+        let d_alpha = (q - j * flow) / (3.0 * mu + j * bd.hardening);
+        e *= 1.0 - 3.0 * mu * d_alpha / q;
+        out.alpha = alpha + d_alpha;
+        out.yielded = true;
+        // b - I = expm1(2 eps) on the same axes; C_p^-1 - I = F^-1 (b - I) F^-T + (C^-1 - I).
+        let nb = compose(expm1(2.0 * (e.x + ev / 3.0)), expm1(2.0 * (e.y + ev / 3.0)), cs, sn);
+        let dj = 1.0 + jm1;
+        let i00 = f.w / dj;
+        let i01 = -f.y / dj;
+        let i10 = -f.z / dj;
+        let i11 = f.x / dj;
+        let t00 = i00 * nb.x + i01 * nb.z;
+        let t01 = i00 * nb.z + i01 * nb.y;
+        let t10 = i10 * nb.x + i11 * nb.z;
+        let t11 = i10 * nb.z + i11 * nb.y;
+        // C - I = H + H^T + H^T H; C^-1 - I = -C^-1 (C - I).
+        let exx = 2.0 * h.x + h.x * h.x + h.z * h.z;
+        let eyy = 2.0 * h.w + h.y * h.y + h.w * h.w;
+        let exy = h.y + h.z + h.x * h.y + h.z * h.w;
+        let cxx = 1.0 + exx;
+        let cyy = 1.0 + eyy;
+        let det_c = dj * dj;
+        let ci_xx = -(cyy * exx - exy * exy) / det_c;
+        let ci_yy = -(cxx * eyy - exy * exy) / det_c;
+        let ci_xy = -(cyy * exy - exy * eyy) / det_c;
+        out.dev = vec4<f32>(
+            t00 * i00 + t01 * i01 + ci_xx,
+            t10 * i10 + t11 * i11 + ci_yy,
+            t00 * i10 + t01 * i11 + ci_xy,
+            expm1(2.0 * (e.z + ev / 3.0) - 2.0 * log1p(zm1)),
+        );
+    }
+    let k = bd.lambda + 2.0 * mu / 3.0;
+    out.stored = 0.5 * k * ev * ev + mu * dot(e, e);
+    let tau = 2.0 * mu * e + vec3<f32>(k * ev);
+    let t = compose(tau.x, tau.y, cs, sn);
+    // P = tau F^-T, F^-T = [f.w -f.z; -f.y f.x] / det F in plane.
+    let dj = 1.0 + jm1;
+    let m00 = f.w / dj;
+    let m01 = -f.z / dj;
+    let m10 = -f.y / dj;
+    let m11 = f.x / dj;
+    out.pk = vec4<f32>(t.x * m00 + t.z * m10, t.x * m01 + t.z * m11, t.z * m00 + t.y * m10, t.z * m01 + t.y * m11);
+    out.p33 = tau.z / (1.0 + zm1);
+    out.cauchy = vec4<f32>(t.x, t.y, t.z, tau.z) / j;
+    return out;
 }
 
 @compute @workgroup_size(WG)
@@ -89,7 +206,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         1.0 - hx * bx[2] - hy * by[2],
         -1.0 - hx * bx[3] - hy * by[3],
     );
-    let a0t = area0 * b.thickness;
+    // Axisymmetric: F_33 = r / R at the centre, its rate, the volume per radian A0 R.
+    let axi = b.formulation == 2u;
+    var zm1 = 0.0;
+    var f33d = 0.0;
+    var a0t = area0 * b.thickness;
+    if (axi) {
+        let rr = el.radius;
+        zm1 = 0.25 * (u[0].x + u[1].x + u[2].x + u[3].x) / rr;
+        f33d = 0.25 * (v[0].x + v[1].x + v[2].x + v[3].x) / rr;
+        a0t = area0 * rr;
+    }
 
     // Displacement gradient H = F - I and its rate.
     var h = vec4<f32>(0.0);   // xx xy yx yy
@@ -104,18 +231,52 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 
     // Stress (first Piola-Kirchhoff) and strain energy density.
     var pk: vec4<f32>;
+    var p33 = 0.0;
     var w: f32;
+    var plastic_work = 0.0;
     if (b.model == 0u) {
         let exy = 0.5 * (h.y + h.z);
-        let tr = h.x + h.w;
+        // zm1: the hoop strain u_r / R (axisymmetric; 0 otherwise).
+        let tr = h.x + h.w + zm1;
         let sxx = b.lambda_plane * tr + 2.0 * b.mu * h.x;
         let syy = b.lambda_plane * tr + 2.0 * b.mu * h.w;
         let sxy = 2.0 * b.mu * exy;
+        p33 = b.lambda * tr + 2.0 * b.mu * zm1;
         pk = vec4<f32>(sxx, sxy, sxy, syy);
-        w = 0.5 * (sxx * h.x + syy * h.w + 2.0 * sxy * exy);
+        w = 0.5 * (sxx * h.x + syy * h.w + 2.0 * sxy * exy + p33 * zm1);
+    } else if (b.model == 2u) {
+//#if plastic
+        let ps0 = plastic_state[2u * e];
+        let ps1 = plastic_state[2u * e + 1u];
+        let s = j2_update(b, h, jm1, zm1, ps0, ps1.x, true);
+        pk = s.pk;
+        p33 = s.p33;
+        w = s.stored;
+        var acc = ps1.y;
+        if (s.yielded) {
+            let dtp = ctrl.dt_prev;
+            if (dtp > 0.0) {
+                // The start of the step that yielded, from the old state, no return.
+                let ho = h - dtp * fd;
+                let jo = ho.x + ho.w + ho.x * ho.w - ho.y * ho.z;
+                let so = j2_update(b, ho, jo, zm1 - dtp * f33d, ps0, ps1.x, false);
+                plastic_work = 0.5 * dtp * (dot(so.pk + s.pk, fd) + (so.p33 + s.p33) * f33d) - (s.stored - so.stored);
+            }
+            acc += plastic_work * a0t;
+            plastic_state[2u * e] = s.dev;
+            plastic_state[2u * e + 1u] = vec4<f32>(s.alpha, acc, 0.0, 0.0);
+        }
+        if ((ctrl.flags & FLAG_SAMPLE) != 0u) {
+            var off = params.n_nodes + params.n_elems + params.n_cons;
+            if (params.loads != 0u) {
+                off += params.n_nodes;
+            }
+            sample_src[off + e] = vec4<f32>(acc, 0.0, 0.0, 0.0);
+        }
+//#endif
     } else {
-        // Out-of-plane stretch z = F33 (plane stress: mu (z^2 - 1) + lambda ln(J2 z) = 0).
-        var zm1 = 0.0;
+        // Out-of-plane stretch z = F33 (plane stress: mu (z^2 - 1) + lambda ln(J2 z) = 0;
+        // axisymmetric: r / R, above).
         if (b.formulation == 1u) {
             let ln_j2 = log1p(jm1);
             var z = max(1.0 - b.lambda * ln_j2 / (2.0 * b.mu + b.lambda), 0.1);
@@ -131,6 +292,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let jf_cof = vec4<f32>(jm1 + j * h.x - h.w, j * f.y + f.z, j * f.z + f.y, jm1 + j * h.w - h.x);
         let fit = vec4<f32>(f.w, -f.z, -f.y, f.x) / j;
         pk = b.mu * jf_cof / j + b.lambda * ln_j * fit;
+        if (b.formulation != 1u) {
+            // P_33 = mu (F_33 - 1 / F_33) + lambda ln J / F_33.
+            p33 = (b.mu * zm1 * (2.0 + zm1) + b.lambda * ln_j) / (1.0 + zm1);
+        }
         // mu/2 (I1 - 3 - 2 ln J) + lambda/2 ln^2 J, I1 - 3 - 2 ln J written without cancellation:
         // 2 (trH - ln J2) + |H|^2 + (z^2 - 1 - 2 ln z); trH - ln J2 = -det H + (jm1 - ln(1 + jm1)).
         let hh = dot(h, h);
@@ -171,6 +336,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var a = 0; a < 4; a++) {
         force[a] = -a0t * vec2<f32>(pk.x * bx[a] + pk.y * by[a], pk.z * bx[a] + pk.w * by[a]);
     }
+    if (axi) {
+        // The hoop stress on u_r: dF_33 / du_r,a = 1 / (4 R).
+        let hoop = 0.25 * a0t * p33 / el.radius;
+        for (var a = 0; a < 4; a++) {
+            force[a].x -= hoop;
+        }
+    }
 
     // Hourglass control.
     var bb = 0.0;
@@ -208,17 +380,26 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // Bulk viscosity.
     var dt = length / c;
     var bulk_p = vec4<f32>(0.0);
+    var bulk_hoop = 0.0;
     if (b.bulk_linear > 0.0 || b.bulk_quadratic > 0.0) {
-        var rate = fd.x + fd.w;
-        if (b.model == 1u) {
-            rate = (fd.x * f.w - fd.y * f.z - fd.z * f.y + fd.w * f.x) / j;
+        var rate = fd.x + fd.w + f33d;
+        if (b.model != 0u) {
+            rate = (fd.x * f.w - fd.y * f.z - fd.z * f.y + fd.w * f.x) / j + f33d / (1.0 + zm1);
         }
         if (rate * length < -1e-9 * c) {
             let q = rho * length * (b.bulk_quadratic * length * rate * rate - b.bulk_linear * c * rate);
             if (b.model == 0u) {
                 bulk_p = vec4<f32>(-q, 0.0, 0.0, -q);
+                if (axi) {
+                    bulk_hoop = -q;
+                }
             } else {
-                bulk_p = vec4<f32>(-q * f.w, q * f.z, q * f.y, -q * f.x);
+                // -q J F^-T: in plane -q F_33 cof(F), hoop -q det F.
+                let z = select(1.0, 1.0 + zm1, axi);
+                bulk_p = vec4<f32>(-q * z * f.w, q * z * f.z, q * z * f.y, -q * z * f.x);
+                if (axi) {
+                    bulk_hoop = -q * j;
+                }
             }
         }
         // Linear part always (no jump in dt between compression and expansion), quadratic in compression.
@@ -227,19 +408,29 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         for (var a = 0; a < 4; a++) {
             force[a] -= a0t * vec2<f32>(bulk_p.x * bx[a] + bulk_p.y * by[a], bulk_p.z * bx[a] + bulk_p.w * by[a]);
         }
+        if (axi) {
+            let hoop = 0.25 * a0t * bulk_hoop / el.radius;
+            for (var a = 0; a < 4; a++) {
+                force[a].x -= hoop;
+            }
+        }
     }
 
     var works = vec2<f32>(0.0);
 //#if dissipation
     {
-        let s0 = elem_state[2u * e];
-        let p0 = elem_state[2u * e + 1u];
+        let s0 = elem_state[ES * e];
+        let p0 = elem_state[ES * e + 1u];
         let dtp = ctrl.dt_prev;
         let hg_work = 0.5 * dtp * dot(hg_rate, s0.xy + hg_q);
-        let bulk_work = 0.5 * a0t * dtp * dot(p0 + bulk_p, fd);
+        var bulk_work = 0.5 * a0t * dtp * dot(p0 + bulk_p, fd);
+//#if axisymmetric
+        bulk_work += 0.5 * a0t * dtp * (elem_state[ES * e + 2u].x + bulk_hoop) * f33d;
+        elem_state[ES * e + 2u] = vec4<f32>(bulk_hoop, 0.0, 0.0, 0.0);
+//#endif
         works = s0.zw + vec2<f32>(hg_work, bulk_work);
-        elem_state[2u * e] = vec4<f32>(hg_q, works);
-        elem_state[2u * e + 1u] = bulk_p;
+        elem_state[ES * e] = vec4<f32>(hg_q, works);
+        elem_state[ES * e + 1u] = bulk_p;
     }
 //#endif
 

@@ -567,13 +567,6 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             };
             let mut solver: Box<dyn Solver> = match backend {
                 Backend::Cpu => cpu(),
-                Backend::Auto if model.has_plasticity() => {
-                    eprintln!(
-                        "notice: the scene has a \"j2_plastic\" material, which only the CPU \
-                         backend runs so far: running on the CPU reference"
-                    );
-                    cpu()
-                }
                 Backend::Auto => match GpuContext::new(adapter.as_deref()) {
                     Ok(ctx) if ctx.is_software() && !adapter_named(adapter.as_deref()) => {
                         eprintln!(
@@ -828,7 +821,7 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
         );
         if b.params.model == ricochet::scene::MaterialModel::J2Plastic {
             println!(
-                "           J2 plastic: yield stress {:e} Pa, hardening modulus {:e} Pa (CPU backend only)",
+                "           J2 plastic: yield stress {:e} Pa, hardening modulus {:e} Pa",
                 b.params.yield_stress, b.params.hardening
             );
         }

@@ -151,7 +151,10 @@ pub fn check_gpu_limits(
 ) -> Result<()> {
     let (ne, nn) = (model.element_count() as u64, model.node_count() as u64);
     let limit = max_binding.min(max_buffer);
-    let need = (GPU_BYTES_PER_ELEMENT * ne).max(GPU_SAMPLE_BYTES * (ne + nn));
+    // The sample sources: one entry per node and element, and one more per element with a
+    // plastic body (its plastic work).
+    let sampled = ne + nn + if model.has_plasticity() { ne } else { 0 };
+    let need = (GPU_BYTES_PER_ELEMENT * ne).max(GPU_SAMPLE_BYTES * sampled);
     if need <= limit {
         return Ok(());
     }

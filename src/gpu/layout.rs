@@ -28,7 +28,7 @@ pub struct Params {
     pub penalty_dt: f32,
     pub mass_damping: f32,
     pub loads: u32,
-    pub _pad: u32,
+    pub plastic: u32,
 }
 
 /// Mirror of WGSL `Control`: the run state advanced on the GPU.
@@ -91,7 +91,8 @@ pub struct GpuBody {
     pub bulk_linear: f32,
     pub bulk_quadratic: f32,
     pub mass: f32,
-    pub _pad1: [f32; 2],
+    pub yield_stress: f32,
+    pub hardening: f32,
 }
 
 /// Mirror of WGSL `Element` (element.wgsl): corners relative to the centre, nodes, body.
@@ -102,7 +103,8 @@ pub struct GpuElement {
     pub c23: [f32; 4],
     pub nodes: [u32; 4],
     pub body: u32,
-    pub _pad: [u32; 3],
+    pub radius: f32,
+    pub _pad: [u32; 2],
 }
 
 /// Mirror of WGSL `Constraint` (boundary.wgsl).

@@ -16,6 +16,10 @@ pub struct Features {
     pub fields: bool,
     /// Pressure loads or mass damping: the node stage keeps v^{n-1/2} for their work (and damps).
     pub loads: bool,
+    /// J2 plastic bodies: the element stage keeps a plastic state per element.
+    pub plastic: bool,
+    /// Axisymmetric bodies: the dissipative element state keeps the hoop bulk stress.
+    pub axisymmetric: bool,
     /// Threads per workgroup of the reductions and control kernels (WGSL `RG`): 256 on GPUs,
     /// 64 on CPU adapters such as lavapipe, where each barrier costs a coroutine switch per lane group.
     pub reduce_group: u32,
@@ -27,6 +31,8 @@ impl Default for Features {
             dissipation: false,
             fields: false,
             loads: false,
+            plastic: false,
+            axisymmetric: false,
             reduce_group: 256,
         }
     }
@@ -38,6 +44,8 @@ impl Features {
             "dissipation" => self.dissipation,
             "fields" => self.fields,
             "loads" => self.loads,
+            "plastic" => self.plastic,
+            "axisymmetric" => self.axisymmetric,
             _ => false,
         }
     }
@@ -48,13 +56,17 @@ impl Features {
         for dissipation in [false, true] {
             for fields in [false, true] {
                 for loads in [false, true] {
-                    for reduce_group in [64, 256] {
-                        v.push(Features {
-                            dissipation,
-                            fields,
-                            loads,
-                            reduce_group,
-                        });
+                    for (plastic, axisymmetric) in [(false, false), (true, true)] {
+                        for reduce_group in [64, 256] {
+                            v.push(Features {
+                                dissipation,
+                                fields,
+                                loads,
+                                plastic,
+                                axisymmetric,
+                                reduce_group,
+                            });
+                        }
                     }
                 }
             }

@@ -9,6 +9,7 @@ use crate::error::{Error, Result};
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
 use crate::step::cpu::CpuSolver;
+use crate::step::plastic::PlasticState;
 use crate::step::{Counters, Event, Failure, Sample, Schedule, Snapshot, Solver};
 
 use super::contact::{ContactCounters, ContactOptions, STATE_SEARCH_GROW};
@@ -129,6 +130,11 @@ impl GpuSolver {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
             loads: plan.has(Stage::Pressure) || plan.has(Stage::MassDamping),
+            plastic: model.has_plasticity(),
+            axisymmetric: model
+                .bodies
+                .iter()
+                .any(|b| b.params.formulation == crate::scene::Formulation::Axisymmetric),
             reduce_group: if ctx.info.device_type == wgpu::DeviceType::Cpu {
                 64
             } else {
@@ -428,6 +434,8 @@ impl GpuSolver {
         let at = self.contact_rows_at as usize;
         let chist: &[u8] = &rows_bytes[at..at + 4 * cstride * new_rows];
         let nb = self.names.bodies.len();
+        // The plastic work's word before the bodies' (plastic scenes).
+        let pw = self.state.params.plastic as usize;
         let mut row_events = Vec::new();
         let first_row = self.rows_read;
         while self.rows_read < ctrl.rows {
@@ -444,12 +452,12 @@ impl GpuSolver {
                 internal: w(5) as f64,
                 hourglass: w(6) as f64,
                 viscous: w(7) as f64,
-                plastic: 0.0,
+                plastic: if pw > 0 { w(9) as f64 } else { 0.0 },
                 external: w(8) as f64,
                 contact: 0.0,
                 contacts: Vec::new(),
                 body_velocity: (0..nb)
-                    .map(|b| [w(9 + 2 * b) as f64, w(10 + 2 * b) as f64])
+                    .map(|b| [w(9 + pw + 2 * b) as f64, w(10 + pw + 2 * b) as f64])
                     .collect(),
             };
             let mut sample = sample;
@@ -708,13 +716,39 @@ impl GpuSolver {
                 [0.5 * (vp[0] + v[0]) as f64, 0.5 * (vp[1] + v[1]) as f64]
             })
             .collect();
+        let plastic = self.plastic_state()?;
         Ok(Snapshot {
             time,
             step,
             displacement,
             velocity,
-            plastic: Vec::new(),
+            plastic,
         })
+    }
+
+    /// The plastic state of every element (empty without a plastic body): C_p^-1 = I + the
+    /// stored deviation, and alpha.
+    fn plastic_state(&mut self) -> Result<Vec<PlasticState>> {
+        let Some(buf) = self.state.plastic.clone() else {
+            return Ok(Vec::new());
+        };
+        let ne = self.state.params.n_elems as u64;
+        let bytes = self.read_copies("plastic_readback", &[(&buf, 0, 32 * ne)])?;
+        let f: &[f32] = bytemuck::cast_slice(&bytes);
+        Ok((0..ne as usize)
+            .map(|e| {
+                let d = &f[8 * e..8 * e + 4];
+                PlasticState {
+                    cp_inv: [
+                        1.0 + d[0] as f64,
+                        1.0 + d[1] as f64,
+                        d[2] as f64,
+                        1.0 + d[3] as f64,
+                    ],
+                    alpha: f[8 * e + 4] as f64,
+                }
+            })
+            .collect())
     }
 
     /// Copies each `(buffer, offset, bytes)` in turn into one fresh staging buffer, reads it back
@@ -964,6 +998,10 @@ impl Solver for GpuSolver {
 
     fn displacement_now(&mut self) -> Result<Vec<[f64; 2]>> {
         Ok(self.nodes()?.0)
+    }
+
+    fn plastic_now(&mut self) -> Result<Vec<PlasticState>> {
+        self.plastic_state()
     }
 
     fn counters(&self) -> Counters {

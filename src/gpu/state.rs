@@ -49,6 +49,8 @@ pub struct GpuState {
     pub(crate) elem_dt: wgpu::Buffer,
     pub(crate) v_prev: wgpu::Buffer,
     pub(crate) u_snap: Option<wgpu::Buffer>,
+    /// J2 plastic state per element (scenes with a plastic body only).
+    pub(crate) plastic: Option<wgpu::Buffer>,
     pub(crate) history: wgpu::Buffer,
     pub(crate) indirect: wgpu::Buffer,
     /// Contact buffers (scenes with contact only).
@@ -186,28 +188,6 @@ impl GpuState {
                 max_groups * 64
             )));
         }
-        if let Some(b) = model
-            .bodies
-            .iter()
-            .find(|b| b.params.formulation == Formulation::Axisymmetric)
-        {
-            return Err(Error::Gpu(format!(
-                "body {:?} is axisymmetric, which the GPU backend does not run yet: run it with \
-                 --backend cpu",
-                b.name
-            )));
-        }
-        if let Some(b) = model
-            .bodies
-            .iter()
-            .find(|b| b.params.model == MaterialModel::J2Plastic)
-        {
-            return Err(Error::Gpu(format!(
-                "body {:?} is of a \"j2_plastic\" material, which the GPU backend does not run \
-                 yet: run it with --backend cpu",
-                b.name
-            )));
-        }
         use wgpu::BufferUsages as U;
         let storage = U::STORAGE;
         let mut a = Alloc {
@@ -226,14 +206,12 @@ impl GpuState {
                     model: match p.model {
                         MaterialModel::LinearElastic => 0,
                         MaterialModel::NeoHookean => 1,
-                        // Refused above.
-                        MaterialModel::J2Plastic => 1,
+                        MaterialModel::J2Plastic => 2,
                     },
                     formulation: match p.formulation {
                         Formulation::PlaneStrain => 0,
                         Formulation::PlaneStress => 1,
-                        // Refused above.
-                        Formulation::Axisymmetric => 0,
+                        Formulation::Axisymmetric => 2,
                     },
                     hourglass: match p.hourglass {
                         HourglassForm::None => 0,
@@ -250,6 +228,8 @@ impl GpuState {
                     bulk_linear: p.bulk_linear as f32,
                     bulk_quadratic: p.bulk_quadratic as f32,
                     mass: b.mass as f32,
+                    yield_stress: p.yield_stress.min(f32::MAX as f64) as f32,
+                    hardening: p.hardening as f32,
                     ..Default::default()
                 }
             })
@@ -272,7 +252,8 @@ impl GpuState {
                     ],
                     nodes: model.quads[e],
                     body: model.element_body[e],
-                    _pad: [0; 3],
+                    radius: model.radius.get(e).copied().unwrap_or(0.0) as f32,
+                    _pad: [0; 2],
                 }
             })
             .collect();
@@ -322,9 +303,16 @@ impl GpuState {
         if has_loads {
             push(nn + ne + nc, nl, 1.0);
         }
+        // J2 plastic work, one accumulator per element after the loads' (element.wgsl).
+        let plastic = kernels.features.plastic;
+        let npl = if plastic { ne } else { 0 };
+        if plastic {
+            push(nn + ne + nc + nl, npl, 1.0);
+        }
         // Small models on CPU adapters: the control workgroup reduces directly (see control.wgsl).
-        let fused = fused
-            .unwrap_or(kernels.features.reduce_group == 64 && nn + ne + nc + nl <= FUSED_LIMIT);
+        let fused = fused.unwrap_or(
+            kernels.features.reduce_group == 64 && nn + ne + nc + nl + npl <= FUSED_LIMIT,
+        );
         let sum_groups = if fused { 0 } else { first };
 
         let contact_set = if plan.has(Stage::Contact) {
@@ -341,7 +329,8 @@ impl GpuState {
             n_snapshot_times = snaps.len() as u32;
             times.extend(snaps);
         }
-        let row_stride = 9 + 2 * nb as u32;
+        // Time, step, dt, the five energies, the plastic work with a plastic body, then per body.
+        let row_stride = 9 + u32::from(plastic) + 2 * nb as u32;
         let row_cap = row_capacity(row_stride, device.limits().max_storage_buffer_binding_size);
         let [end_lo, end_hi] = ticks(schedule.end_time, schedule.end_time);
         let params = Params {
@@ -367,7 +356,7 @@ impl GpuState {
                 .map_or(0.0, |(d, _)| d as f32),
             mass_damping: model.mass_damping as f32,
             loads: u32::from(has_loads),
-            _pad: 0,
+            plastic: u32::from(plastic),
         };
         let control = Control {
             flags: FLAG_SAMPLE
@@ -413,9 +402,19 @@ impl GpuState {
         });
         let v_old = has_loads.then(|| a.zeroed("v_old", 8 * nn as u64, storage));
         let elem_dt = a.zeroed("element_dt", 4 * ne as u64, storage | U::COPY_SRC);
+        // Two vec4 per element, three with axisymmetric bodies (the hoop bulk stress).
+        let es_words = if kernels.features.axisymmetric { 3 } else { 2 };
         let elem_state = plan
             .has_dissipation()
-            .then(|| a.zeroed("element_dissipation", 32 * ne as u64, storage));
+            .then(|| a.zeroed("element_dissipation", 16 * es_words * ne as u64, storage));
+        // J2: C_p^-1 - I and (alpha, plastic work) per element; zero is the virgin state.
+        let plastic_buf = plastic.then(|| {
+            a.zeroed(
+                "element_plastic_state",
+                32 * ne as u64,
+                storage | U::COPY_SRC | U::COPY_DST,
+            )
+        });
         let v_prev = a.zeroed("v_prev", 8 * nn as u64, storage | U::COPY_SRC);
         let u_snap =
             has_fields.then(|| a.zeroed("u_snapshot", 8 * nn as u64, storage | U::COPY_SRC));
@@ -433,7 +432,11 @@ impl GpuState {
             .collect();
         let cons_buf =
             (nc > 0).then(|| a.init("constraints", bytemuck::cast_slice(&cons), storage));
-        let sample_src = a.zeroed("sample_sources", 16 * (nn + ne + nc + nl) as u64, storage);
+        let sample_src = a.zeroed(
+            "sample_sources",
+            16 * (nn + ne + nc + nl + npl) as u64,
+            storage,
+        );
         // First-level reduction results; when the control workgroup reduces directly (`fused`)
         // they are never read or written, and only the minimum size is bound (the kernels
         // declare them).
@@ -504,6 +507,9 @@ impl GpuState {
         ];
         if let Some(s) = &elem_state {
             el.push((8, s));
+        }
+        if let Some(s) = &plastic_buf {
+            el.push((9, s));
         }
         let mut nd: Vec<(u32, &wgpu::Buffer)> = vec![
             (0, &params_buf),
@@ -624,6 +630,7 @@ impl GpuState {
             elem_dt,
             v_prev,
             u_snap,
+            plastic: plastic_buf,
             history,
             indirect,
             contact,

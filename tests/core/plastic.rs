@@ -12,83 +12,9 @@ use ricochet::step::{Event, Snapshot, Solver};
 
 use crate::common::*;
 
-/// Annealed pure aluminium (sigma_y / E = 2.9e-4, so that the finite-strain terms of the elastic
-/// range, 1.5 |eps| relative, stay below 1e-3 sigma_y at first yield).
-const E: f64 = 70e9;
-const NU: f64 = 0.33;
-const YIELD: f64 = 20e6;
-const HARDENING: f64 = 200e6;
-/// Side of the block (m) and the final compressive strain |eps| = RATE * END.
-const SIDE: f64 = 0.01;
-const RATE: f64 = 100.0;
-const END: f64 = 1e-4;
-
-/// The block in uniaxial plane strain: v_y = -RATE (y - SIDE / 2) everywhere, held on the top and
-/// bottom edges, v_x = 0 on every node. The stress is uniform, so the inner nodes feel no net
-/// force and keep the linear field: a homogeneous state, exactly.
-fn scene(format: &str) -> String {
-    let h = 0.5 * SIDE * RATE;
-    format!(
-        r#"
-[run]
-end_time = {END:e}
-history_interval = {:e}
-field_interval = {:e}
-field_format = "{format}"
-bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
-
-[[material]]
-name = "aluminium"
-model = "j2_plastic"
-density = 2700.0
-youngs_modulus = {E:e}
-poisson_ratio = {NU}
-yield_stress = {YIELD:e}
-hardening_modulus = {HARDENING:e}
-
-[[body]]
-name = "block"
-material = "aluminium"
-mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [{SIDE:e}, {SIDE:e}], cells = [4, 4] }} }}
-velocity_gradient = [[0.0, 0.0], [0.0, -{RATE:e}]]
-
-[[boundary]]
-body = "block"
-region = {{ min = [-1.0, -1.0], max = [1.0, 1.0] }}
-velocity = {{ x = 0.0 }}
-
-[[boundary]]
-body = "block"
-region = {{ min = [-1.0, -1e-9], max = [1.0, 1e-9] }}
-velocity = {{ y = {h:e} }}
-
-[[boundary]]
-body = "block"
-region = {{ min = [-1.0, {top_lo:e}], max = [1.0, {top_hi:e}] }}
-velocity = {{ y = {:e} }}
-"#,
-        END / 50.0,
-        END / 40.0,
-        -h,
-        top_lo = SIDE - 1e-9,
-        top_hi = SIDE + 1e-9,
-    )
-}
-
-/// The closed form (small strain): von Mises stress at compressive strain x = |eps|.
-fn von_mises_closed(x: f64) -> f64 {
-    let mu = E / (2.0 * (1.0 + NU));
-    let first = YIELD / (2.0 * mu);
-    if x <= first {
-        2.0 * mu * x
-    } else {
-        YIELD + 2.0 * mu * HARDENING / (3.0 * mu + HARDENING) * (x - first)
-    }
-}
-
-fn bulk_modulus() -> f64 {
-    E / (3.0 * (1.0 - 2.0 * NU))
-}
+#[path = "../shared/plastic_scene.rs"]
+mod plastic_scene;
+use plastic_scene::*;
 
 /// Runs the block on the CPU and returns its model and snapshots.
 fn run_block() -> (Model, Vec<Snapshot>) {
@@ -284,8 +210,6 @@ fn a_plastic_bar_on_a_wall_dissipates_its_impact_in_plastic_work() {
     let asset = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/plastic_bar_wall.toml");
     let o = run_bin(&["run", asset, "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    // `--backend auto` runs a plastic scene on the CPU, saying so.
-    assert!(String::from_utf8_lossy(&o.stderr).contains("j2_plastic"));
     let (header, rows) = read_csv(&out.join("history.csv"));
     let (ke, w, err) = (
         column(&header, "kinetic_energy"),
