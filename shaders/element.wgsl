@@ -16,8 +16,12 @@ struct Body {
     bulk_linear: f32,
     bulk_quadratic: f32,
     mass: f32,
-    yield_stress: f32,    // J2: sigma_y
-    hardening: f32,       // J2: H
+    yield_stress: f32,    // J2: sigma_y (Johnson-Cook: A)
+    hardening: f32,       // J2: H (Johnson-Cook: 0)
+    jc_b: f32,            // Johnson-Cook B, n, C, reference rate (0, 1, 0, 1 without)
+    jc_n: f32,
+    jc_c: f32,
+    jc_rate0: f32,
 }
 
 struct Element {
@@ -96,8 +100,58 @@ fn compose(a: f32, b: f32, c: f32, s: f32) -> vec3<f32> {
     return vec3<f32>(a * c * c + b * s * s, a * s * s + b * c * c, (a - b) * c * s);
 }
 
-// h = F - I (xx xy yx yy), jm1 = det F - 1 (in plane), zm1 = F_33 - 1, d = C_p^-1 - I.
-fn j2_update(bd: Body, h: vec4<f32>, jm1: f32, zm1: f32, d: vec4<f32>, alpha: f32, allow: bool) -> J2 {
+// (sigma_y + H alpha + B alpha^n)(1 + C ln(max(rate / rate0, 1))).
+fn flow_stress(bd: Body, alpha: f32, rate: f32) -> f32 {
+    let hard = bd.yield_stress + bd.hardening * alpha + bd.jc_b * pow(max(alpha, 0.0), bd.jc_n);
+    return hard * (1.0 + bd.jc_c * log(max(rate / bd.jc_rate0, 1.0)));
+}
+
+// The increment of alpha of the return (CPU: plastic::return_increment): closed form for linear
+// hardening, else Newton's method kept inside the bracket (0, q / 3 mu).
+fn return_increment(bd: Body, q: f32, j: f32, alpha: f32, dt: f32) -> f32 {
+    let mu = bd.mu;
+    if (bd.jc_b == 0.0 && bd.jc_c == 0.0) {
+        return (q - j * (bd.yield_stress + bd.hardening * alpha)) / (3.0 * mu + j * bd.hardening);
+    }
+    var lo = 0.0;
+    var hi = q / (3.0 * mu);
+    var x = 0.5 * hi;
+    for (var it = 0; it < 60; it++) {
+        var rate = 0.0;
+        if (dt > 0.0) {
+            rate = x / dt;
+        }
+        let gx = q - 3.0 * mu * x - j * flow_stress(bd, alpha + x, rate);
+        if (gx > 0.0) {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let a = alpha + x;
+        let r = rate / bd.jc_rate0;
+        let rate_factor = 1.0 + bd.jc_c * log(max(r, 1.0));
+        let hard = bd.yield_stress + bd.hardening * a + bd.jc_b * pow(a, bd.jc_n);
+        let d_hard = bd.hardening + bd.jc_b * bd.jc_n * pow(a, bd.jc_n - 1.0);
+        var d_rate = 0.0;
+        if (r > 1.0) {
+            d_rate = bd.jc_c / x;
+        }
+        let dg = -3.0 * mu - j * (d_hard * rate_factor + hard * d_rate);
+        var next = x - gx / dg;
+        if (!(next > lo && next < hi)) {
+            next = 0.5 * (lo + hi);
+        }
+        if (abs(next - x) <= 1e-7 * (hi + lo) || hi - lo <= 1e-7 * hi) {
+            return next;
+        }
+        x = next;
+    }
+    return x;
+}
+
+// h = F - I (xx xy yx yy), jm1 = det F - 1 (in plane), zm1 = F_33 - 1, d = C_p^-1 - I; dt the
+// step that led here (the Johnson-Cook rate; 0: none).
+fn j2_update(bd: Body, h: vec4<f32>, jm1: f32, zm1: f32, d: vec4<f32>, alpha: f32, allow: bool, dt: f32) -> J2 {
     let f = h + vec4<f32>(1.0, 0.0, 0.0, 1.0);
     // b - I = (F F^T - I) + F D F^T.
     let fd00 = f.x * d.x + f.y * d.z;
@@ -120,13 +174,13 @@ fn j2_update(bd: Body, h: vec4<f32>, jm1: f32, zm1: f32, d: vec4<f32>, alpha: f3
     let mu = bd.mu;
     let q = 2.0 * mu * sqrt(1.5 * e2_trial);
     let j = (1.0 + jm1) * (1.0 + zm1);
-    let flow = bd.yield_stress + bd.hardening * alpha;
+    let flow = flow_stress(bd, alpha, 0.0);
     var out: J2;
     out.dev = d;
     out.alpha = alpha;
     out.yielded = false;
     if (allow && q > j * flow) {
-        let d_alpha = (q - j * flow) / (3.0 * mu + j * bd.hardening);
+        let d_alpha = return_increment(bd, q, j, alpha, dt);
         e *= 1.0 - 3.0 * mu * d_alpha / q;
         out.alpha = alpha + d_alpha;
         out.yielded = true;
@@ -248,7 +302,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 //#if plastic
         let ps0 = plastic_state[2u * e];
         let ps1 = plastic_state[2u * e + 1u];
-        let s = j2_update(b, h, jm1, zm1, ps0, ps1.x, true);
+        let s = j2_update(b, h, jm1, zm1, ps0, ps1.x, true, ctrl.dt_prev);
         pk = s.pk;
         p33 = s.p33;
         w = s.stored;
@@ -259,7 +313,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                 // The start of the step that yielded, from the old state, no return.
                 let ho = h - dtp * fd;
                 let jo = ho.x + ho.w + ho.x * ho.w - ho.y * ho.z;
-                let so = j2_update(b, ho, jo, zm1 - dtp * f33d, ps0, ps1.x, false);
+                let so = j2_update(b, ho, jo, zm1 - dtp * f33d, ps0, ps1.x, false, 0.0);
                 plastic_work = 0.5 * dtp * (dot(so.pk + s.pk, fd) + (so.p33 + s.p33) * f33d) - (s.stored - so.stored);
             }
             acc += plastic_work * a0t;

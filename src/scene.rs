@@ -299,6 +299,25 @@ pub struct Plasticity {
     pub yield_stress: f64,
     /// Linear isotropic hardening modulus H (Pa), >= 0: sigma_y + H eps_p.
     pub hardening_modulus: f64,
+    /// The Johnson-Cook flow stress instead (then `yield_stress` = a, `hardening_modulus` = 0).
+    pub johnson_cook: Option<JohnsonCook>,
+}
+
+/// Johnson-Cook flow stress without thermal softening:
+/// (a + b eps_p^n)(1 + c ln(max(rate / reference_strain_rate, 1))), rate the equivalent plastic
+/// strain rate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JohnsonCook {
+    /// Initial yield stress A (Pa), > 0.
+    pub a: f64,
+    /// Hardening coefficient B (Pa), >= 0.
+    pub b: f64,
+    /// Hardening exponent n, in (0, 10].
+    pub n: f64,
+    /// Strain-rate coefficient C, >= 0.
+    pub c: f64,
+    /// Reference strain rate (1/s), > 0.
+    pub reference_strain_rate: f64,
 }
 
 /// A material, validated.
@@ -1241,18 +1260,32 @@ impl Validator<'_> {
             return Ok(None);
         }
         if let Some(jc) = &m.johnson_cook {
-            return Err(self.invalid(
-                format!("{key}.johnson_cook"),
-                jc.to_string(),
-                "the Johnson-Cook flow stress is not implemented yet: give yield_stress and \
-                 hardening_modulus (linear isotropic hardening)",
-            ));
+            for (k, given) in [
+                ("yield_stress", m.yield_stress.is_some()),
+                ("hardening_modulus", m.hardening_modulus.is_some()),
+            ] {
+                if given {
+                    return Err(self.invalid(
+                        format!("{key}.{k}"),
+                        "given",
+                        "with johnson_cook the flow stress is (a + b eps_p^n)(1 + c ln(rate / \
+                         reference_strain_rate)): give either johnson_cook or yield_stress and \
+                         hardening_modulus",
+                    ));
+                }
+            }
+            let jc = self.johnson_cook(&format!("{key}.johnson_cook"), jc)?;
+            return Ok(Some(Plasticity {
+                yield_stress: jc.a,
+                hardening_modulus: 0.0,
+                johnson_cook: Some(jc),
+            }));
         }
         let Some(y) = m.yield_stress else {
             return Err(self.invalid(
                 format!("{key}.yield_stress"),
                 "missing",
-                "a \"j2_plastic\" material needs yield_stress (Pa, > 0)",
+                "a \"j2_plastic\" material needs yield_stress (Pa, > 0) or johnson_cook",
             ));
         };
         let yield_stress = self.positive(&format!("{key}.yield_stress"), y)?;
@@ -1263,7 +1296,59 @@ impl Validator<'_> {
         Ok(Some(Plasticity {
             yield_stress,
             hardening_modulus,
+            johnson_cook: None,
         }))
+    }
+
+    /// The `johnson_cook = { a, b, n, c, reference_strain_rate }` table at `key`.
+    fn johnson_cook(&self, key: &str, v: &toml::Value) -> Result<JohnsonCook> {
+        let Some(t) = v.as_table() else {
+            return Err(self.invalid(
+                key,
+                v.to_string(),
+                "expected a table { a, b, n, c, reference_strain_rate }",
+            ));
+        };
+        const KEYS: [&str; 5] = ["a", "b", "n", "c", "reference_strain_rate"];
+        if let Some(k) = t.keys().find(|k| !KEYS.contains(&k.as_str())) {
+            return Err(self.invalid(
+                format!("{key}.{k}"),
+                t[k].to_string(),
+                "unknown key (expected a, b, n, c, reference_strain_rate)",
+            ));
+        }
+        let get = |k: &str| -> Result<f64> {
+            match t.get(k) {
+                None => Err(self.invalid(
+                    format!("{key}.{k}"),
+                    "missing",
+                    "the Johnson-Cook flow stress needs a, b, n, c and reference_strain_rate",
+                )),
+                Some(toml::Value::Float(x)) => Ok(*x),
+                Some(toml::Value::Integer(i)) => Ok(*i as f64),
+                Some(other) => {
+                    Err(self.invalid(format!("{key}.{k}"), other.to_string(), "expected a number"))
+                }
+            }
+        };
+        let a = self.positive(&format!("{key}.a"), get("a")?)?;
+        let b = self.non_negative(&format!("{key}.b"), get("b")?)?;
+        let n = get("n")?;
+        if !(n.is_finite() && n > 0.0 && n <= 10.0) {
+            return Err(self.invalid(format!("{key}.n"), fmt_num(n), "must lie in (0, 10]"));
+        }
+        let c = self.non_negative(&format!("{key}.c"), get("c")?)?;
+        let reference_strain_rate = self.positive(
+            &format!("{key}.reference_strain_rate"),
+            get("reference_strain_rate")?,
+        )?;
+        Ok(JohnsonCook {
+            a,
+            b,
+            n,
+            c,
+            reference_strain_rate,
+        })
     }
 
     fn body(&self, key: &str, b: &RawBody, materials: &[Material]) -> Result<Body> {

@@ -93,6 +93,10 @@ pub struct GpuBody {
     pub mass: f32,
     pub yield_stress: f32,
     pub hardening: f32,
+    pub jc_b: f32,
+    pub jc_n: f32,
+    pub jc_c: f32,
+    pub jc_rate0: f32,
 }
 
 /// Mirror of WGSL `Element` (element.wgsl): corners relative to the centre, nodes, body.
@@ -139,7 +143,7 @@ pub const NONE: u32 = u32::MAX;
 const _: () = assert!(std::mem::size_of::<Params>() == 80);
 const _: () = assert!(std::mem::size_of::<Control>() == 84);
 const _: () = assert!(std::mem::size_of::<Instance>() == 32);
-const _: () = assert!(std::mem::size_of::<GpuBody>() == 64);
+const _: () = assert!(std::mem::size_of::<GpuBody>() == 80);
 const _: () = assert!(std::mem::size_of::<GpuElement>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuConstraint>() == 32);
 const _: () = assert!(std::mem::offset_of!(Control, state) as u64 == CONTROL_STATE_OFFSET);

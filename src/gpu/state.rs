@@ -230,6 +230,10 @@ impl GpuState {
                     mass: b.mass as f32,
                     yield_stress: p.yield_stress.min(f32::MAX as f64) as f32,
                     hardening: p.hardening as f32,
+                    jc_b: p.jc_b as f32,
+                    jc_n: p.jc_n as f32,
+                    jc_c: p.jc_c as f32,
+                    jc_rate0: p.jc_rate0 as f32,
                     ..Default::default()
                 }
             })

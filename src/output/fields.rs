@@ -18,7 +18,7 @@ use crate::error::Result;
 use crate::model::Model;
 use crate::scene::{FieldFormat, Formulation, MaterialModel};
 use crate::step::element::{evaluate_state, Dissipation};
-use crate::step::plastic::PlasticState;
+use crate::step::plastic::{j2_elastic, PlasticState};
 use crate::step::Snapshot;
 
 use super::{create_dir, write_file, write_pieces};
@@ -65,7 +65,16 @@ pub fn element_fields_state(
         0.0,
         plastic,
     );
-    let [sxx, syy, sxy, szz] = out.stress;
+    // A J2 element at the state the solver reached at u: its elastic response (evaluating it as
+    // a step would return again, without the rate of the step that got there).
+    let (stress, plastic_strain) = if p.model == MaterialModel::J2Plastic {
+        let f = out.def_grad;
+        let j2 = j2_elastic(p, &f, f[0] * f[3] - f[1] * f[2], out.hoop_stretch, plastic);
+        (j2.cauchy, plastic.alpha)
+    } else {
+        (out.stress, 0.0)
+    };
+    let [sxx, syy, sxy, szz] = stress;
     let von_mises = (0.5
         * ((sxx - syy).powi(2) + (syy - szz).powi(2) + (szz - sxx).powi(2) + 6.0 * sxy * sxy))
         .sqrt();
@@ -91,11 +100,10 @@ pub fn element_fields_state(
     let (dx, dy, dz) = (exx - m, eyy - m, ezz - m);
     let equivalent_strain = (2.0 / 3.0 * (dx * dx + dy * dy + dz * dz + 2.0 * exy * exy)).sqrt();
     ElementFields {
-        stress: out.stress,
+        stress,
         von_mises,
         equivalent_strain,
-        // At the state reached at u, the return is elastic: out.plastic is `plastic`.
-        plastic_strain: out.plastic.alpha,
+        plastic_strain,
         pressure: -(sxx + syy + szz) / 3.0,
     }
 }

@@ -58,6 +58,15 @@ pub struct ElementParams {
     pub yield_stress: f64,
     /// Linear isotropic hardening modulus (J2 plastic materials; 0 otherwise).
     pub hardening: f64,
+    /// Johnson-Cook B, n, C and reference strain rate (0, 1, 0, 1 without Johnson-Cook): the
+    /// flow stress is (sigma_y + H alpha + B alpha^n)(1 + C ln(max(rate / rate0, 1))).
+    pub jc_b: f64,
+    /// Johnson-Cook n.
+    pub jc_n: f64,
+    /// Johnson-Cook C.
+    pub jc_c: f64,
+    /// Johnson-Cook reference strain rate.
+    pub jc_rate0: f64,
 }
 
 impl ElementParams {
@@ -74,6 +83,7 @@ impl ElementParams {
         let nu = material.poisson_ratio;
         let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
         let mu = e / (2.0 * (1.0 + nu));
+        let jc = material.plasticity.and_then(|p| p.johnson_cook);
         let lambda_plane = match formulation {
             Formulation::PlaneStrain | Formulation::Axisymmetric => lambda,
             Formulation::PlaneStress => 2.0 * lambda * mu / (lambda + 2.0 * mu),
@@ -99,6 +109,10 @@ impl ElementParams {
                 .plasticity
                 .map_or(f64::INFINITY, |p| p.yield_stress),
             hardening: material.plasticity.map_or(0.0, |p| p.hardening_modulus),
+            jc_b: jc.map_or(0.0, |j| j.b),
+            jc_n: jc.map_or(1.0, |j| j.n),
+            jc_c: jc.map_or(0.0, |j| j.c),
+            jc_rate0: jc.map_or(1.0, |j| j.reference_strain_rate),
         }
     }
 
@@ -333,7 +347,7 @@ pub fn evaluate_state(
     // Stress (first Piola-Kirchhoff, xx xy yx yy) and strain energy density.
     let (pk, p33, w, cauchy, new_plastic, plastic_density) = if p.model == MaterialModel::J2Plastic
     {
-        let s = j2_stress(p, &f, j, f33, plastic);
+        let s = j2_stress(p, &f, j, f33, plastic, dt_prev);
         let mut d = s.dissipated;
         if s.state.alpha > plastic.alpha && dt_prev > 0.0 {
             // F_n = F_{n+1} - dt Fdot with the old state: the start of the step that yielded.
@@ -543,7 +557,7 @@ pub fn stress(p: &ElementParams, f: &[f64; 4], j: f64, f33: f64) -> ([f64; 4], f
             (pk, w, [sxx, syy, sxy, szz], p33)
         }
         MaterialModel::J2Plastic => {
-            let s = j2_stress(p, f, j, f33, &PlasticState::VIRGIN);
+            let s = j2_stress(p, f, j, f33, &PlasticState::VIRGIN, 0.0);
             (s.pk, s.stored, s.cauchy, s.p33)
         }
     }

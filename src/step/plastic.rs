@@ -92,7 +92,8 @@ fn compose(a: f64, b: f64, c: f64, s: f64) -> [f64; 3] {
 
 /// Stress and new state of a J2 element with in-plane deformation gradient `f` (xx, xy, yx,
 /// yy), its determinant `j`, the out-of-plane stretch `f33` (1 in plane strain, r / R in an
-/// axisymmetric body) and the previous state `old` (see the module documentation).
+/// axisymmetric body), the previous state `old` and the step `dt` that led here (for the strain
+/// rate of the Johnson-Cook flow stress; 0: no rate effect). See the module documentation.
 #[inline(always)]
 pub fn j2_stress(
     p: &ElementParams,
@@ -100,8 +101,58 @@ pub fn j2_stress(
     j: f64,
     f33: f64,
     old: &PlasticState,
+    dt: f64,
 ) -> J2Stress {
-    j2_update(p, f, j, f33, old, true)
+    j2_update(p, f, j, f33, old, true, dt)
+}
+
+/// The flow stress at equivalent plastic strain `alpha` and plastic strain rate `rate`:
+/// (sigma_y + H alpha + B alpha^n)(1 + C ln(max(rate / rate0, 1))) (linear hardening: B = C = 0).
+#[inline(always)]
+pub fn flow_stress(p: &ElementParams, alpha: f64, rate: f64) -> f64 {
+    let hard = p.yield_stress + p.hardening * alpha + p.jc_b * alpha.max(0.0).powf(p.jc_n);
+    hard * (1.0 + p.jc_c * (rate / p.jc_rate0).max(1.0).ln())
+}
+
+/// The increment of alpha of a return from the von Mises stress `q` of the trial (Kirchhoff),
+/// volume ratio `j`, plastic strain `alpha` and step `dt`: the root of
+/// q - 3 mu d = j flow(alpha + d, d / dt) in (0, q / 3 mu), by Newton's method kept inside a
+/// bracket (bisection where a Newton step leaves it). Closed form for linear hardening.
+#[inline(always)]
+fn return_increment(p: &ElementParams, q: f64, j: f64, alpha: f64, dt: f64) -> f64 {
+    let mu = p.mu;
+    if p.jc_b == 0.0 && p.jc_c == 0.0 {
+        let flow = p.yield_stress + p.hardening * alpha;
+        return (q - j * flow) / (3.0 * mu + j * p.hardening);
+    }
+    let rate = |x: f64| if dt > 0.0 { x / dt } else { 0.0 };
+    let g = |x: f64| q - 3.0 * mu * x - j * flow_stress(p, alpha + x, rate(x));
+    let (mut lo, mut hi) = (0.0, q / (3.0 * mu));
+    let mut x = 0.5 * hi;
+    for _ in 0..100 {
+        let gx = g(x);
+        if gx > 0.0 {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let a = alpha + x;
+        let r = rate(x) / p.jc_rate0;
+        let rate_factor = 1.0 + p.jc_c * r.max(1.0).ln();
+        let hard = p.yield_stress + p.hardening * a + p.jc_b * a.powf(p.jc_n);
+        let d_hard = p.hardening + p.jc_b * p.jc_n * a.powf(p.jc_n - 1.0);
+        let d_rate = if r > 1.0 { p.jc_c / x } else { 0.0 };
+        let dg = -3.0 * mu - j * (d_hard * rate_factor + hard * d_rate);
+        let mut next = x - gx / dg;
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        if (next - x).abs() <= 1e-15 * (hi + lo) || hi - lo <= 1e-15 * hi {
+            return next;
+        }
+        x = next;
+    }
+    x
 }
 
 /// The elastic response of the state `state` at (`f`, `f33`), with no return.
@@ -113,7 +164,7 @@ pub fn j2_elastic(
     f33: f64,
     state: &PlasticState,
 ) -> J2Stress {
-    j2_update(p, f, j, f33, state, false)
+    j2_update(p, f, j, f33, state, false, 0.0)
 }
 
 /// The plastic work of a step that yielded, per reference volume: the work of the stress over
@@ -140,6 +191,7 @@ fn j2_update(
     f33: f64,
     old: &PlasticState,
     allow_return: bool,
+    dt: f64,
 ) -> J2Stress {
     let [c0, c1, c2, c3] = old.cp_inv;
     // The volume ratio.
@@ -162,12 +214,13 @@ fn j2_update(
     let mu = p.mu;
     // von Mises stress of the trial: sqrt(3/2) |2 mu e|.
     let q = 2.0 * mu * (1.5 * e2_trial).sqrt();
-    // The yield condition is on the Cauchy stress, tau_vm / J <= sigma_y + H alpha.
-    let flow = p.yield_stress + p.hardening * old.alpha;
+    // The yield condition is on the Cauchy stress, tau_vm / J <= flow stress (its rate term is 0
+    // at the elastic trial).
+    let flow = flow_stress(p, old.alpha, 0.0);
     let mut state = *old;
     let mut dissipated = 0.0;
     if allow_return && q > j * flow {
-        let d_alpha = (q - j * flow) / (3.0 * mu + j * p.hardening);
+        let d_alpha = return_increment(p, q, j, old.alpha, dt);
         let scale = 1.0 - 3.0 * mu * d_alpha / q;
         e = e.map(|x| x * scale);
         let e2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
@@ -234,6 +287,7 @@ mod tests {
             plasticity: Some(Plasticity {
                 yield_stress: 400e6,
                 hardening_modulus: 100e6,
+                johnson_cook: None,
             }),
         };
         ElementParams::new(
@@ -266,7 +320,7 @@ mod tests {
         let p = copper();
         let e = 1e-6;
         let f = [1.0 + e, 0.4 * e, 0.4 * e, 1.0 - 0.3 * e];
-        let s = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN);
+        let s = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN, 0.0);
         assert_eq!(s.state, PlasticState::VIRGIN);
         assert_eq!(s.dissipated, 0.0);
         let tr = f[0] + f[3] - 2.0;
@@ -283,7 +337,7 @@ mod tests {
     fn the_return_lands_on_the_hardened_yield_surface_and_dissipates() {
         let p = copper();
         let f = [1.0, 0.0, 0.0, 0.98];
-        let s = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN);
+        let s = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN, 0.0);
         assert!(s.state.alpha > 0.0 && s.dissipated > 0.0);
         let flow = p.yield_stress + p.hardening * s.state.alpha;
         // Cauchy von Mises = flow stress exactly.
@@ -293,7 +347,7 @@ mod tests {
         assert!(((c[0] * c[1] - c[2] * c[2]) * c[3] - 1.0).abs() < 1e-12);
         // Re-evaluating at the same F from the new state gives the same state and stress (to
         // round-off: the trial then lies on the yield surface).
-        let again = j2_stress(&p, &f, det(&f), 1.0, &s.state);
+        let again = j2_stress(&p, &f, det(&f), 1.0, &s.state, 0.0);
         assert!((again.state.alpha - s.state.alpha).abs() < 1e-14);
         assert!(again.dissipated < 1e-12 * s.dissipated);
         for i in 0..4 {
@@ -301,15 +355,72 @@ mod tests {
         }
     }
 
+    fn johnson_cook(c: f64) -> ElementParams {
+        use crate::scene::JohnsonCook;
+        let m = Material {
+            name: "copper".into(),
+            model: MaterialModel::J2Plastic,
+            density: 8930.0,
+            youngs_modulus: 117e9,
+            poisson_ratio: 0.35,
+            plasticity: Some(Plasticity {
+                yield_stress: 9.0e7,
+                hardening_modulus: 0.0,
+                johnson_cook: Some(JohnsonCook {
+                    a: 9.0e7,
+                    b: 2.92e8,
+                    n: 0.31,
+                    c,
+                    reference_strain_rate: 1.0,
+                }),
+            }),
+        };
+        ElementParams::new(
+            &m,
+            Formulation::PlaneStrain,
+            1.0,
+            HourglassForm::None,
+            0.0,
+            (0.0, 0.0),
+        )
+    }
+
+    #[test]
+    fn the_johnson_cook_return_lands_on_its_flow_stress_at_the_step_rate() {
+        for (c, dt) in [(0.0, 0.0), (0.025, 1e-7), (0.025, 1e-3)] {
+            let p = johnson_cook(c);
+            let f = [1.0, 0.01, 0.0, 0.985];
+            let s = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN, dt);
+            let a = s.state.alpha;
+            assert!(a > 0.0);
+            let rate = if dt > 0.0 { a / dt } else { 0.0 };
+            let flow = flow_stress(&p, a, rate);
+            let vm = von_mises(&s.cauchy);
+            assert!(
+                (vm - flow).abs() < 1e-9 * flow,
+                "c {c} dt {dt}: {vm} against {flow}"
+            );
+            let expect = (9.0e7 + 2.92e8 * a.powf(0.31)) * (1.0 + c * rate.max(1.0).ln());
+            assert!((flow - expect).abs() < 1e-12 * expect);
+        }
+        // Faster steps (higher rates) raise the flow stress.
+        let p = johnson_cook(0.025);
+        let f = [1.0, 0.01, 0.0, 0.985];
+        let slow = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN, 1e-3);
+        let fast = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN, 1e-7);
+        assert!(von_mises(&fast.cauchy) > von_mises(&slow.cauchy));
+        assert!(fast.state.alpha < slow.state.alpha);
+    }
+
     #[test]
     fn a_rigid_rotation_leaves_the_state_and_the_rotated_stress_unchanged() {
         let p = copper();
         let g = [1.01, 0.02, -0.01, 0.97];
-        let a = j2_stress(&p, &g, det(&g), 1.0, &PlasticState::VIRGIN);
+        let a = j2_stress(&p, &g, det(&g), 1.0, &PlasticState::VIRGIN, 0.0);
         assert!(a.state.alpha > 0.0);
         for angle in [0.3, 1.2, std::f64::consts::PI, -2.5] {
             let f = rotate(angle, &g);
-            let b = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN);
+            let b = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN, 0.0);
             assert!((b.state.alpha - a.state.alpha).abs() < 1e-14);
             for i in 0..4 {
                 assert!(

@@ -156,10 +156,38 @@ fn bad_plastic_materials() {
         &plastic("yield_stress = 2.5e8\nhardening_modulus = -1.0e9"),
         &["material[0].hardening_modulus", "-1000000000"],
     );
+    expect_accepted(
+        "johnson_cook_ok",
+        &plastic(
+            "johnson_cook = { a = 9.0e7, b = 2.92e8, n = 0.31, c = 0.025, reference_strain_rate = 1.0 }",
+        ),
+        true,
+    );
     expect_rejected(
-        "plastic_johnson_cook",
-        &plastic("yield_stress = 2.5e8\njohnson_cook = { a = 9.0e7, b = 2.92e8 }"),
-        &["material[0].johnson_cook", "not implemented"],
+        "johnson_cook_missing_key",
+        &plastic("johnson_cook = { a = 9.0e7, n = 0.31, c = 0.025, reference_strain_rate = 1.0 }"),
+        &["material[0].johnson_cook.b", "missing"],
+    );
+    expect_rejected(
+        "johnson_cook_with_yield_stress",
+        &plastic(
+            "yield_stress = 2.5e8\njohnson_cook = { a = 9.0e7, b = 2.92e8, n = 0.31, c = 0.025, reference_strain_rate = 1.0 }",
+        ),
+        &["material[0].yield_stress", "johnson_cook"],
+    );
+    expect_rejected(
+        "johnson_cook_zero_exponent",
+        &plastic(
+            "johnson_cook = { a = 9.0e7, b = 2.92e8, n = 0.0, c = 0.025, reference_strain_rate = 1.0 }",
+        ),
+        &["material[0].johnson_cook.n", "0.0"],
+    );
+    expect_rejected(
+        "johnson_cook_unknown_key",
+        &plastic(
+            "johnson_cook = { a = 9.0e7, b = 2.92e8, n = 0.31, c = 0.025, reference_strain_rate = 1.0, m = 1.09 }",
+        ),
+        &["material[0].johnson_cook.m", "unknown key"],
     );
     expect_rejected(
         "elastic_with_yield",

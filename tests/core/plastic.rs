@@ -18,7 +18,11 @@ use plastic_scene::*;
 
 /// Runs the block on the CPU and returns its model and snapshots.
 fn run_block() -> (Model, Vec<Snapshot>) {
-    let (scene, model, plan) = build(&scene("ascii"));
+    run_text(&scene("ascii"))
+}
+
+fn run_text(text: &str) -> (Model, Vec<Snapshot>) {
+    let (scene, model, plan) = build(text);
     let mut solver = CpuSolver::new(model.clone(), plan, ricochet::run::schedule(&scene));
     let mut snaps = Vec::new();
     let mut done = false;
@@ -227,4 +231,27 @@ fn a_plastic_bar_on_a_wall_dissipates_its_impact_in_plastic_work() {
     assert!(last[w] > 0.9 * first[ke]);
     assert!(last[ke] < 0.02 * first[ke]);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_johnson_cook_rate_term_raises_the_flow_stress_as_its_closed_form() {
+    let c = 0.1;
+    let (model, snaps) = run_text(&rate_scene("ascii", c));
+    let last = snaps.last().unwrap();
+    let top = model
+        .position
+        .iter()
+        .position(|p| (p[1] - SIDE).abs() < 1e-12)
+        .unwrap();
+    let x = -2.0 * last.displacement[top][1] / SIDE;
+    let want = rate_flow(x, c);
+    let got = fields(&model, last, 0).von_mises;
+    eprintln!(
+        "Johnson-Cook rate term: sigma_vm {got:.6e} Pa against A (1 + C ln(2/3 rate)) = {want:.6e} \
+         ({:.2e} of A; 1 + C ln(...) = {:.4})",
+        (got - want).abs() / YIELD,
+        want / YIELD
+    );
+    assert!((got - want).abs() < 1e-3 * YIELD);
+    assert!(want > 1.4 * YIELD);
 }

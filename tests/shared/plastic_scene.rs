@@ -66,6 +66,24 @@ velocity = {{ y = {:e} }}
 }
 
 /// The closed form (small strain): von Mises stress at compressive strain x = |eps|.
+/// The scene with the Johnson-Cook flow stress A (1 + C ln(max(rate, 1))) (B = 0, reference
+/// rate 1/s) instead of linear hardening.
+pub fn rate_scene(format: &str, c: f64) -> String {
+    scene(format).replace(
+        &format!("yield_stress = {YIELD:e}\nhardening_modulus = {HARDENING:e}"),
+        &format!(
+            "johnson_cook = {{ a = {YIELD:e}, b = 0.0, n = 1.0, c = {c}, reference_strain_rate = 1.0 }}"
+        ),
+    )
+}
+
+/// The steady flow stress of [`rate_scene`] at compressive strain `x`: A (1 + C ln(alpha rate)),
+/// with the plastic strain rate (2/3) of the logarithmic strain rate RATE / (1 - x) (the trial's
+/// von Mises stress grows by 2 mu d|eps|, each return takes 3 mu d alpha off it).
+pub fn rate_flow(x: f64, c: f64) -> f64 {
+    YIELD * (1.0 + c * (2.0 / 3.0 * RATE / (1.0 - x)).ln())
+}
+
 pub fn von_mises_closed(x: f64) -> f64 {
     let mu = E / (2.0 * (1.0 + NU));
     let first = YIELD / (2.0 * mu);
