@@ -412,7 +412,13 @@ pub fn run_with(
     let mut rows_before = 0usize;
     let (mut history, mut fields) = match &options.resume {
         None => (
-            HistoryWriter::create(&history_path, &bodies, &contacts, model.has_plasticity())?,
+            HistoryWriter::create(
+                &history_path,
+                &bodies,
+                &contacts,
+                model.has_plasticity(),
+                !model.radius.is_empty(),
+            )?,
             match scene.run.field_interval {
                 Some(_) => Some(FieldWriter::new(out_dir, format)?),
                 None => None,

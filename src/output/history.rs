@@ -21,6 +21,11 @@ pub const COLUMNS: [&str; 10] = [
     "energy_error",
 ];
 
+/// The comment line before the header of a scene with an axisymmetric body (readers skip lines
+/// that start with `#`).
+pub const PER_RADIAN: &str = "# axisymmetric: energies, works, contact forces and masses are per \
+     radian (times 2 pi for the whole part); x is the radius r, y the axis";
+
 /// The energy audit: turns samples into balance errors relative to the largest energy seen.
 #[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct EnergyAudit {
@@ -71,7 +76,8 @@ pub struct HistoryWriter {
 impl HistoryWriter {
     /// Creates the file and writes the header; `bodies` name the per-body columns and `contacts`
     /// the per-contact (and rigid wall) columns; `plastic` adds the `plastic_work` column after
-    /// `viscous_work` (scenes with a J2 plastic material).
+    /// `viscous_work` (scenes with a J2 plastic material); `per_radian` writes the comment line
+    /// [`PER_RADIAN`] before the header (scenes with an axisymmetric body).
     ///
     /// # Errors
     /// [`Error::Write`] when the file cannot be created.
@@ -80,6 +86,7 @@ impl HistoryWriter {
         bodies: &[String],
         contacts: &[String],
         plastic: bool,
+        per_radian: bool,
     ) -> Result<Self> {
         let file = File::create(path).map_err(|source| Error::Write {
             path: path.to_path_buf(),
@@ -92,6 +99,9 @@ impl HistoryWriter {
             rows: 0,
             plastic,
         };
+        if per_radian {
+            w.line(PER_RADIAN)?;
+        }
         let mut header = COLUMNS.join(",");
         if plastic {
             header = header.replace(",viscous_work,", ",viscous_work,plastic_work,");

@@ -37,7 +37,8 @@ impl History {
     /// [`Error::Read`] when the file cannot be read, [`Error::Parse`] when it is malformed.
     pub fn read(path: &Path) -> Result<Self> {
         let text = read_text(path)?;
-        let mut lines = text.lines();
+        // Comment lines (`#`, such as the axisymmetric note) before the header.
+        let mut lines = text.lines().skip_while(|l| l.starts_with('#'));
         let header = lines
             .next()
             .ok_or_else(|| parse_error(path, "empty file: no header".into()))?;

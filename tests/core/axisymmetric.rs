@@ -120,3 +120,33 @@ fn bad_axisymmetric_input_is_refused() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_history_of_an_axisymmetric_scene_says_it_is_per_radian() {
+    let dir = tmp_dir("axi-history");
+    let file = dir.join("tube.toml");
+    std::fs::write(&file, scene(0.05, "initial_velocity = [0.0, -1.0]")).unwrap();
+    let out = dir.join("out");
+    let o = run_bin(&[
+        "run",
+        file.to_str().unwrap(),
+        "--backend",
+        "cpu",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let first = text.lines().next().unwrap();
+    assert_eq!(first, ricochet::output::history::PER_RADIAN);
+    // The readers skip it: the columns and rows as usual, the kinetic energy per radian.
+    let (header, rows) = read_csv(&out.join("history.csv"));
+    let ke = rows[0][column(&header, "kinetic_energy")];
+    let mass: f64 = RHO * (0.1f64.powi(2) - 0.05f64.powi(2)) / 2.0 * 0.02;
+    assert!(
+        (ke - 0.5 * mass).abs() < 1e-9 * ke,
+        "{ke} against {}",
+        0.5 * mass
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -152,7 +152,8 @@ impl Stepper {
 pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(path)
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
-    let mut lines = text.lines();
+    // Comment lines (`#`: the axisymmetric note) before the header.
+    let mut lines = text.lines().skip_while(|l| l.starts_with('#'));
     let header: Vec<String> = lines
         .next()
         .expect("header line")

@@ -692,7 +692,9 @@ fn run_case(file: &Path, out: &Path) -> Result<Outcome, String> {
             }
             let history = std::fs::read_to_string(out.join("history.csv"))
                 .map_err(|e| format!("history.csv: {e}"))?;
-            for (i, line) in history.lines().enumerate().skip(1) {
+            // The header, after the comment lines (`#`: the axisymmetric note), is not numbers.
+            let comments = history.lines().take_while(|l| l.starts_with('#')).count();
+            for (i, line) in history.lines().enumerate().skip(comments + 1) {
                 for x in line.split(',') {
                     if !x.parse::<f64>().is_ok_and(f64::is_finite) {
                         return Err(format!(

@@ -108,3 +108,27 @@ fn path_against_cpu(text: &str, rate: Option<f64>) {
         "plastic work {wg} against {wc}"
     );
 }
+
+#[test]
+fn only_plastic_and_axisymmetric_scenes_get_their_element_state() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let elastic = scene("binary").replace("model = \"j2_plastic\"", "model = \"neo_hookean\"");
+    let elastic = elastic.replace(
+        &format!("yield_stress = {YIELD:e}\nhardening_modulus = {HARDENING:e}\n"),
+        "",
+    );
+    for (text, plastic) in [(scene("binary"), true), (elastic, false)] {
+        let (scene, model, plan) = load(&text, "state");
+        let gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+        let names: Vec<&str> = gpu.state().allocated.iter().map(|(n, _)| *n).collect();
+        assert_eq!(
+            names.contains(&"element_plastic_state"),
+            plastic,
+            "{names:?}"
+        );
+        assert_eq!(gpu.kernels().features.plastic, plastic);
+        assert_eq!(gpu.state().params.plastic, u32::from(plastic));
+        assert!(!gpu.kernels().features.axisymmetric);
+    }
+}
