@@ -127,5 +127,66 @@ fn gpu_contact(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, cpu_step, gpu_steps, cpu_contact, gpu_contact);
+/// The bench block (100 x 100) with each constitutive model: what the J2 element stage costs
+/// against the elastic ones, on the CPU reference and the GPU. The J2 block's yield stress is
+/// 1 MPa, so that every element yields at every step (the return and its plastic work run).
+fn element_models(c: &mut Criterion) {
+    let models = [
+        ("linear_elastic", "model = \"linear_elastic\""),
+        ("neo_hookean", "model = \"neo_hookean\""),
+        (
+            "j2_plastic",
+            "model = \"j2_plastic\"\nyield_stress = 1.0e6\nhardening_modulus = 1.0e9",
+        ),
+    ];
+    let scene_of = |model: &str| {
+        let text = ricochet::bench::block_text(100).replace("model = \"linear_elastic\"", model);
+        ricochet::scene::Scene::parse(&text, std::path::Path::new("bench.toml")).expect("scene")
+    };
+    let mut group = c.benchmark_group("cpu_step_by_model");
+    for (name, keys) in models {
+        let scene = scene_of(keys);
+        let model = ricochet::run::model(&scene).expect("model");
+        let plan = Plan::new(&scene, &model);
+        let ne = model.element_count() as u64;
+        let mut solver = CpuSolver::new(model, plan, ricochet::run::schedule(&scene));
+        solver.run_steps(2);
+        group.throughput(Throughput::Elements(ne));
+        group.bench_function(name, |b| b.iter(|| solver.run_steps(1)));
+    }
+    group.finish();
+    let Ok(ctx) = ricochet::gpu::GpuContext::shared() else {
+        eprintln!("element_models: no adapter, GPU skipped");
+        return;
+    };
+    let mut group = c.benchmark_group("gpu_64_steps_by_model");
+    group.sample_size(10);
+    for (name, keys) in models {
+        let scene = scene_of(keys);
+        let model = ricochet::run::model(&scene).expect("model");
+        let plan = Plan::new(&scene, &model);
+        let ne = model.element_count() as u64;
+        let mut solver = ricochet::gpu::GpuSolver::new(
+            ctx.clone(),
+            &model,
+            &plan,
+            ricochet::run::schedule(&scene),
+        )
+        .expect("gpu solver");
+        group.throughput(Throughput::Elements(64 * ne));
+        group.bench_function(name, |b| {
+            b.iter(|| solver.time_stage("step", 64).expect("steps"))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    cpu_step,
+    gpu_steps,
+    cpu_contact,
+    gpu_contact,
+    element_models
+);
 criterion_main!(benches);

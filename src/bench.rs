@@ -62,8 +62,8 @@ pub struct BenchRow {
     pub contact_searches: u64,
 }
 
-/// The block of [`scene`]: `cells` x `cells` quads, 0.1 m wide.
-fn block_text(cells: usize) -> String {
+/// The text of the block of [`scene`]: `cells` x `cells` quads, 0.1 m wide.
+pub fn block_text(cells: usize) -> String {
     format!(
         r#"
 [run]
