@@ -146,7 +146,7 @@ pub enum MetricKind {
     PeakPlasticStrain,
     /// Thick cylinder under internal pressure (`lame = [a, b, p]`): the largest error of the
     /// radial and hoop stress at the element centres of `body` at the end against the closed form
-    /// at the centres' radii (Pa; REFERENCES.md section 9).
+    /// at the centres' reference radii (Pa; REFERENCES.md section 9).
     LameStressError,
     /// The same for the radial displacement of the nodes (m).
     LameDisplacementError,

@@ -313,12 +313,12 @@ pub fn measure(m: &Metric, r: &RunData<'_>) -> std::result::Result<f64, String> 
             let mut err = 0.0f64;
             if m.kind == MetricKind::LameStressError {
                 for e in b.elements.clone() {
+                    // The closed form is small-strain: at the centre's reference radius (the
+                    // current one shifts sigma_theta(a) by 2 B u_r / a^3, 0.24 % of p here).
                     let q = r.model.quads[e];
                     let rc = 0.25
                         * q.iter()
-                            .map(|&n| {
-                                r.model.position[n as usize][0] + r.displacement[n as usize][0]
-                            })
+                            .map(|&n| r.model.position[n as usize][0])
                             .sum::<f64>();
                     let s = element_fields_state(
                         r.model,
