@@ -819,11 +819,22 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             b.params.dilatational_speed(),
             b.params.hourglass
         );
+        if b.params.formulation == ricochet::scene::Formulation::Axisymmetric {
+            println!("           axisymmetric (x = r; masses, forces and energies per radian)");
+        }
         if b.params.model == ricochet::scene::MaterialModel::J2Plastic {
-            println!(
-                "           J2 plastic: yield stress {:e} Pa, hardening modulus {:e} Pa",
-                b.params.yield_stress, b.params.hardening
-            );
+            let p = &b.params;
+            if p.jc_b != 0.0 || p.jc_c != 0.0 {
+                println!(
+                    "           J2 plastic, Johnson-Cook: a {:e} Pa, b {:e} Pa, n {}, c {}, reference strain rate {:e} 1/s",
+                    p.yield_stress, p.jc_b, p.jc_n, p.jc_c, p.jc_rate0
+                );
+            } else {
+                println!(
+                    "           J2 plastic: yield stress {:e} Pa, hardening modulus {:e} Pa",
+                    p.yield_stress, p.hardening
+                );
+            }
         }
     }
     println!(

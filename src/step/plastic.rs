@@ -277,18 +277,15 @@ mod tests {
     use super::*;
     use crate::scene::{Formulation, HourglassForm, Material, MaterialModel, Plasticity};
 
-    fn copper() -> ElementParams {
+    /// Copper's elastic constants with `plasticity`.
+    fn copper_with(plasticity: Plasticity) -> ElementParams {
         let m = Material {
             name: "copper".into(),
             model: MaterialModel::J2Plastic,
             density: 8930.0,
             youngs_modulus: 117e9,
             poisson_ratio: 0.35,
-            plasticity: Some(Plasticity {
-                yield_stress: 400e6,
-                hardening_modulus: 100e6,
-                johnson_cook: None,
-            }),
+            plasticity: Some(plasticity),
         };
         ElementParams::new(
             &m,
@@ -298,6 +295,14 @@ mod tests {
             0.0,
             (0.0, 0.0),
         )
+    }
+
+    fn copper() -> ElementParams {
+        copper_with(Plasticity {
+            yield_stress: 400e6,
+            hardening_modulus: 100e6,
+            johnson_cook: None,
+        })
     }
 
     fn det(f: &[f64; 4]) -> f64 {
@@ -356,33 +361,17 @@ mod tests {
     }
 
     fn johnson_cook(c: f64) -> ElementParams {
-        use crate::scene::JohnsonCook;
-        let m = Material {
-            name: "copper".into(),
-            model: MaterialModel::J2Plastic,
-            density: 8930.0,
-            youngs_modulus: 117e9,
-            poisson_ratio: 0.35,
-            plasticity: Some(Plasticity {
-                yield_stress: 9.0e7,
-                hardening_modulus: 0.0,
-                johnson_cook: Some(JohnsonCook {
-                    a: 9.0e7,
-                    b: 2.92e8,
-                    n: 0.31,
-                    c,
-                    reference_strain_rate: 1.0,
-                }),
+        copper_with(Plasticity {
+            yield_stress: 9.0e7,
+            hardening_modulus: 0.0,
+            johnson_cook: Some(crate::scene::JohnsonCook {
+                a: 9.0e7,
+                b: 2.92e8,
+                n: 0.31,
+                c,
+                reference_strain_rate: 1.0,
             }),
-        };
-        ElementParams::new(
-            &m,
-            Formulation::PlaneStrain,
-            1.0,
-            HourglassForm::None,
-            0.0,
-            (0.0, 0.0),
-        )
+        })
     }
 
     #[test]

@@ -150,3 +150,24 @@ fn the_history_of_an_axisymmetric_scene_says_it_is_per_radian() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn check_prints_the_formulation_and_the_flow_stress() {
+    let dir = tmp_dir("axi-check");
+    let file = dir.join("tube.toml");
+    let text = scene(0.05, "").replace(
+        "model = \"linear_elastic\"",
+        "model = \"j2_plastic\"\njohnson_cook = { a = 9.0e7, b = 2.92e8, n = 0.31, c = 0.025, reference_strain_rate = 1.0 }",
+    );
+    std::fs::write(&file, text).unwrap();
+    let o = run_bin(&["check", file.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("axisymmetric (x = r;"), "{out}");
+    assert!(
+        out.contains("J2 plastic, Johnson-Cook: a 9e7 Pa, b 2.92e8 Pa, n 0.31, c 0.025"),
+        "{out}"
+    );
+    assert!(out.contains("-> plasticity ->"), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
