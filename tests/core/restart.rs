@@ -71,7 +71,8 @@ fn interrupted_run_restarts_to_the_same_outputs() {
     // Interrupted halfway (as by SIGINT, through the progress callback), the run writes a
     // checkpoint where it stopped; the restart completes it.
     let base = tmp_dir("restart-interrupt");
-    for scene in ["disk_wall.toml", "pile.toml"] {
+    // The plastic bar: its plastic state and work are part of the checkpoint.
+    for scene in ["disk_wall.toml", "pile.toml", "plastic_bar_wall.toml"] {
         let path = asset(scene);
         let a = base.join(format!("{scene}-a"));
         let o = run_cpu(&path, &a, &[]);

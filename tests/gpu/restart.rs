@@ -38,10 +38,12 @@ fn ricochet(args: &[&str]) -> std::process::Output {
 }
 
 /// (scene, --end-time, checkpoint interval): the 16-disk pile (32 device searches over its
-/// 1 ms) and the disk on a wall to 60 us (with a snapshot every 20 us).
-const CASES: [(&str, &str, f64); 2] = [
+/// 1 ms), the disk on a wall to 60 us (with a snapshot every 20 us) and the plastic bar on a wall
+/// to 40 us (its plastic state buffer and work in the checkpoint).
+const CASES: [(&str, &str, f64); 3] = [
     ("pile.toml", "1e-3", 3e-4),
     ("disk_wall.toml", "6e-5", 2.5e-5),
+    ("plastic_bar_wall.toml", "4e-5", 1.5e-5),
 ];
 
 #[test]
