@@ -127,14 +127,7 @@ fn the_history_of_an_axisymmetric_scene_says_it_is_per_radian() {
     let file = dir.join("tube.toml");
     std::fs::write(&file, scene(0.05, "initial_velocity = [0.0, -1.0]")).unwrap();
     let out = dir.join("out");
-    let o = run_bin(&[
-        "run",
-        file.to_str().unwrap(),
-        "--backend",
-        "cpu",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_cpu(&file, &out, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
     let first = text.lines().next().unwrap();

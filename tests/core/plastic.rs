@@ -115,14 +115,7 @@ fn the_energy_audit_closes_with_the_plastic_work() {
     let file = dir.join("block.toml");
     std::fs::write(&file, scene("ascii")).unwrap();
     let out = dir.join("out");
-    let o = run_bin(&[
-        "run",
-        file.to_str().unwrap(),
-        "--backend",
-        "cpu",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_cpu(&file, &out, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (header, rows) = read_csv(&out.join("history.csv"));
     assert_eq!(header[6], "viscous_work");
