@@ -7,17 +7,38 @@ use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughpu
 use ricochet::bench::{ContactScene, PileContact};
 
 use ricochet::plan::Plan;
+use ricochet::scene::Scene;
 use ricochet::step::cpu::CpuSolver;
+
+/// A CPU solver of `scene` after its first two steps, and its element count.
+fn cpu_solver(scene: &Scene) -> (CpuSolver, u64) {
+    let model = ricochet::run::model(scene).expect("model");
+    let plan = Plan::new(scene, &model);
+    let ne = model.element_count() as u64;
+    let mut solver = CpuSolver::new(model, plan, ricochet::run::schedule(scene));
+    solver.run_steps(2);
+    (solver, ne)
+}
+
+/// A GPU solver of `scene` at t = 0, and its element count.
+fn gpu_solver(
+    ctx: &std::sync::Arc<ricochet::gpu::GpuContext>,
+    scene: &Scene,
+) -> (ricochet::gpu::GpuSolver, u64) {
+    let model = ricochet::run::model(scene).expect("model");
+    let plan = Plan::new(scene, &model);
+    let ne = model.element_count() as u64;
+    let solver =
+        ricochet::gpu::GpuSolver::new(ctx.clone(), &model, &plan, ricochet::run::schedule(scene))
+            .expect("gpu solver");
+    (solver, ne)
+}
 
 fn cpu_step(c: &mut Criterion) {
     let mut group = c.benchmark_group("cpu_step");
     for cells in [32usize, 100] {
         let scene = ricochet::bench::scene(cells).expect("bench scene");
-        let model = ricochet::run::model(&scene).expect("model");
-        let plan = Plan::new(&scene, &model);
-        let ne = model.element_count() as u64;
-        let mut solver = CpuSolver::new(model, plan, ricochet::run::schedule(&scene));
-        solver.run_steps(2);
+        let (mut solver, ne) = cpu_solver(&scene);
         group.throughput(Throughput::Elements(ne));
         group.bench_function(format!("{}_elements", ne), |b| {
             b.iter(|| solver.run_steps(1))
@@ -35,16 +56,7 @@ fn gpu_steps(c: &mut Criterion) {
     group.sample_size(10);
     for cells in [32usize, 100] {
         let scene = ricochet::bench::scene(cells).expect("bench scene");
-        let model = ricochet::run::model(&scene).expect("model");
-        let plan = Plan::new(&scene, &model);
-        let ne = model.element_count() as u64;
-        let mut solver = ricochet::gpu::GpuSolver::new(
-            ctx.clone(),
-            &model,
-            &plan,
-            ricochet::run::schedule(&scene),
-        )
-        .expect("gpu solver");
+        let (mut solver, ne) = gpu_solver(&ctx, &scene);
         group.throughput(Throughput::Elements(64 * ne));
         group.bench_function(format!("{}_elements", ne), |b| {
             b.iter(|| solver.time_stage("step", 64).expect("steps"))
@@ -141,16 +153,11 @@ fn element_models(c: &mut Criterion) {
     ];
     let scene_of = |model: &str| {
         let text = ricochet::bench::block_text(100).replace("model = \"linear_elastic\"", model);
-        ricochet::scene::Scene::parse(&text, std::path::Path::new("bench.toml")).expect("scene")
+        Scene::parse(&text, std::path::Path::new("bench.toml")).expect("scene")
     };
     let mut group = c.benchmark_group("cpu_step_by_model");
     for (name, keys) in models {
-        let scene = scene_of(keys);
-        let model = ricochet::run::model(&scene).expect("model");
-        let plan = Plan::new(&scene, &model);
-        let ne = model.element_count() as u64;
-        let mut solver = CpuSolver::new(model, plan, ricochet::run::schedule(&scene));
-        solver.run_steps(2);
+        let (mut solver, ne) = cpu_solver(&scene_of(keys));
         group.throughput(Throughput::Elements(ne));
         group.bench_function(name, |b| b.iter(|| solver.run_steps(1)));
     }
@@ -162,17 +169,7 @@ fn element_models(c: &mut Criterion) {
     let mut group = c.benchmark_group("gpu_64_steps_by_model");
     group.sample_size(10);
     for (name, keys) in models {
-        let scene = scene_of(keys);
-        let model = ricochet::run::model(&scene).expect("model");
-        let plan = Plan::new(&scene, &model);
-        let ne = model.element_count() as u64;
-        let mut solver = ricochet::gpu::GpuSolver::new(
-            ctx.clone(),
-            &model,
-            &plan,
-            ricochet::run::schedule(&scene),
-        )
-        .expect("gpu solver");
+        let (mut solver, ne) = gpu_solver(&ctx, &scene_of(keys));
         group.throughput(Throughput::Elements(64 * ne));
         group.bench_function(name, |b| {
             b.iter(|| solver.time_stage("step", 64).expect("steps"))
