@@ -23,6 +23,10 @@ struct Params {
     mass_damping: f32,    // alpha of run.mass_damping (0: none)
     loads: u32,           // 1: pressure or damping work is summed (sample_src after the constraints)
     plastic: u32,         // 1: J2 plastic work is summed (sample_src after the loads) into word 9
+    inst_groups: u32,     // workgroups of sum_instances (the second level of the sums; 0: fused)
+    _p0: u32,
+    _p1: u32,
+    _p2: u32,
 }
 
 // Run control, advanced on the GPU so that a step needs no readback.

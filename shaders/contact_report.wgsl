@@ -1,12 +1,13 @@
 // The end of the contact step (CPU reference: the end of crate::contact::ContactSet::apply and its
 // reports): corrected velocities and u_{n+1}, the impulses' work, and per interface the impulse on
 // its first body, the active slaves and the largest penetration. Every sum is a fixed-order
-// reduction (workgroup trees, then one thread over the partials in order): the same bits on every run.
+// reduction (workgroup trees over lanes that each take a fixed stride): the same bits on every run.
 
 @group(0) @binding(13) var<storage, read_write> ws: array<u32>;
 @group(0) @binding(14) var<storage, read_write> grow: array<u32>;
 
 var<workgroup> sh_f: array<vec4<f32>, CG>;
+var<workgroup> sh_ni: u32;
 
 // 4. Corrected velocities, u_{n+1}, the impulses' work J (v^{n-1/2} + v^{n+1/2}) / 2 (free
 //    directions only: on a constrained one the inverse mass is 0) and kinetic sample sources;
@@ -135,7 +136,10 @@ fn acc_set(f: u32, a: vec4<f32>) {
 }
 
 // 5b. Per interface (its slots are contiguous: ws[o_iface + f] .. ws[o_iface + f + 1]), the
-//     partials of its runs in order; the history row on sample steps; the work; sweep counts.
+//     partials of its runs, lane l taking runs l, l + CG, ... in order, then the tree (sums, and
+//     the largest penetration); the history row on sample steps; the work (the finish partials
+//     the same way); sweep counts. The whole workgroup works on each interface in turn, so that
+//     an interface of many slots costs its slots / CG^2 loads per lane, not its slots / CG.
 @compute @workgroup_size(CG)
 fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
@@ -145,39 +149,71 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     let sample = (ctrl.flags & FLAG_SAMPLE) != 0u;
     let dtn = ctrl.dt_node;
     let row = (ctrl.rows % cc.p.row_capacity) * cc.p.hist_stride;
-    for (var f = l; f < cc.p.n_ifaces; f += CG) {
+    if (l == 0u) {
+        sh_ni = cc.p.n_ifaces;
+    }
+    let ni = workgroupUniformLoad(&sh_ni);
+    for (var f = 0u; f < ni; f++) {
         let lo = ws[cc.p.o_iface + f];
         let hi = ws[cc.p.o_iface + f + 1u];
         var r = vec4<f32>(0.0);
-        var at = lo;
-        while (at < hi) {
-            let p = fws[cc.p.f_rp + at];
-            r = vec4<f32>(r.xyz + p.xyz, max(r.w, p.w));
-            at = (at / CG + 1u) * CG;
-        }
-        var a = acc_get(f);
-        a += vec4<f32>(r.xy, dtn, 0.0);
-        if (sample) {
-            var force = vec2<f32>(0.0);
-            if (a.z > 0.0) {
-                force = a.xy / a.z;
+        if (hi > lo) {
+            // Runs start at lo and at every chunk boundary after it, up to hi.
+            let c0 = lo / CG;
+            let runs = (hi - 1u) / CG - c0 + 1u;
+            for (var j = l; j < runs; j += CG) {
+                let at = select((c0 + j) * CG, lo, j == 0u);
+                let p = fws[cc.p.f_rp + at];
+                r = vec4<f32>(r.xyz + p.xyz, max(r.w, p.w));
             }
-            c_hist[row + 1u + 4u * f] = force.x;
-            c_hist[row + 2u + 4u * f] = force.y;
-            c_hist[row + 3u + 4u * f] = r.w;
-            c_hist[row + 4u + 4u * f] = r.z;
-            a = vec4<f32>(0.0);
         }
-        acc_set(f, a);
+        sh_f[l] = r;
+        workgroupBarrier();
+        for (var h = CG / 2u; h > 0u; h >>= 1u) {
+            if (l < h) {
+                let a = sh_f[l];
+                let b = sh_f[l + h];
+                sh_f[l] = vec4<f32>(a.xyz + b.xyz, max(a.w, b.w));
+            }
+            workgroupBarrier();
+        }
+        if (l == 0u) {
+            let t = sh_f[0];
+            var a = acc_get(f);
+            a += vec4<f32>(t.xy, dtn, 0.0);
+            if (sample) {
+                var force = vec2<f32>(0.0);
+                if (a.z > 0.0) {
+                    force = a.xy / a.z;
+                }
+                c_hist[row + 1u + 4u * f] = force.x;
+                c_hist[row + 2u + 4u * f] = force.y;
+                c_hist[row + 3u + 4u * f] = t.w;
+                c_hist[row + 4u + 4u * f] = t.z;
+                a = vec4<f32>(0.0);
+            }
+            acc_set(f, a);
+        }
+        workgroupBarrier();
+    }
+    // The impulses' work: the finish partials, lane l taking workgroups l, l + CG, ... in order.
+    var part = vec4<f32>(0.0);
+    let ng = (cc.p.n_local + CG - 1u) / CG;
+    for (var g = l; g < ng; g += CG) {
+        part += fws[cc.p.f_wp + g];
+    }
+    sh_f[l] = part;
+    workgroupBarrier();
+    for (var h = CG / 2u; h > 0u; h >>= 1u) {
+        if (l < h) {
+            sh_f[l] += sh_f[l + h];
+        }
+        workgroupBarrier();
     }
     if (l != 0u) {
         return;
     }
-    var total = vec4<f32>(0.0);
-    let ng = (cc.p.n_local + CG - 1u) / CG;
-    for (var g = 0u; g < ng; g++) {
-        total += fws[cc.p.f_wp + g];
-    }
+    let total = sh_f[0];
     var w = acc_get(cc.p.n_ifaces);
     w.x += total.x;
     w.y = total.y;

@@ -1,7 +1,8 @@
 // Run control on the GPU, one workgroup, so that a batch of steps needs no readback.
 // control_dt: second level of the stable-step reduction, checks, dt^{n+1/2} and dt_n.
-// control_end: second level of the sample sums and the history row, then t_{n+1}, the flags of the
-//   next step (sample / snapshot / end, same rules as step::Clock) and the indirect dispatch sizes.
+// control_end: the history row from the instances' sums (reduce.wgsl's sum_instances, or here for
+//   fused small models), then t_{n+1}, the flags of the next step (sample / snapshot / end, same
+//   rules as step::Clock) and the indirect dispatch sizes.
 
 const RG: u32 = 256u;
 
@@ -9,7 +10,6 @@ const RG: u32 = 256u;
 @group(0) @binding(1) var<storage, read_write> ctrl: Control;
 @group(0) @binding(2) var<storage, read> dt_partial: array<vec2<u32>>;
 @group(0) @binding(3) var<storage, read> instances: array<Instance>;
-@group(0) @binding(4) var<storage, read> sum_partial: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> history: array<f32>;
 @group(0) @binding(6) var<storage, read> times: array<vec2<u32>>;   // sample, then snapshot times (ticks)
 @group(0) @binding(7) var<storage, read_write> indirect: array<u32>;
@@ -152,16 +152,14 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
         sh_u = ctrl.flags;
     }
     let flags = workgroupUniformLoad(&sh_u);
-    if ((flags & FLAG_SAMPLE) != 0u) {
+    let sample = (flags & FLAG_SAMPLE) != 0u;
+    // Fused (small models on CPU adapters): the instances' sums here; else sum_instances did them.
+    if (sample && params.sum_groups == 0u) {
         for (var r = 0u; r < params.n_instances; r++) {
             let inst = instances[r];
             var acc = vec4<f32>(0.0);
-            if (params.sum_groups == 0u) {
-                for (var j = l; j < inst.count; j += RG) {
-                    acc += sample_src[inst.start + j];
-                }
-            } else if (l < inst.groups) {
-                acc = sum_partial[inst.first_group + l];
+            for (var j = l; j < inst.count; j += RG) {
+                acc += sample_src[inst.start + j];
             }
             sh_sum[l] = acc;
             workgroupBarrier();
@@ -177,6 +175,29 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
             workgroupBarrier();
         }
     }
+    // The bodies' velocities into the row and their kinetic energies summed, across the lanes
+    // (body b on lane b % RG, each lane in body order, then the tree: a fixed order).
+    let nb = params.n_bodies;
+    let base = (ctrl.rows % params.row_capacity) * params.row_stride;
+    // The plastic work (word 9) comes before the bodies' words in a plastic scene.
+    let bw = base + 9u + params.plastic;
+    if (sample) {
+        var ke_lane = 0.0;
+        for (var b = l; b < nb; b += RG) {
+            ke_lane += inst_res[b].x;
+            let v = inst_res[b].yz * instances[b].scale;
+            history[bw + 2u * b] = v.x;
+            history[bw + 1u + 2u * b] = v.y;
+        }
+        sh_sum[l] = vec4<f32>(ke_lane, 0.0, 0.0, 0.0);
+        workgroupBarrier();
+        for (var s = RG / 2u; s > 0u; s >>= 1u) {
+            if (l < s) {
+                sh_sum[l] += sh_sum[l + s];
+            }
+            workgroupBarrier();
+        }
+    }
     if (l != 0u) {
         return;
     }
@@ -185,18 +206,8 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
         fail(2u, bad, 0.0);
         return;
     }
-    let nb = params.n_bodies;
-    if ((flags & FLAG_SAMPLE) != 0u) {
-        let base = (ctrl.rows % params.row_capacity) * params.row_stride;
-        var ke = 0.0;
-        // The plastic work (word 9) comes before the bodies' words in a plastic scene.
-        let bw = base + 9u + params.plastic;
-        for (var b = 0u; b < nb; b++) {
-            ke += inst_res[b].x;
-            let v = inst_res[b].yz * instances[b].scale;
-            history[bw + 2u * b] = v.x;
-            history[bw + 1u + 2u * b] = v.y;
-        }
+    if (sample) {
+        let ke = sh_sum[0].x;
         if (params.plastic != 0u) {
             history[base + 9u] = inst_res[params.n_instances - 1u].x;
         }
@@ -266,4 +277,7 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     indirect[0] = select(0u, params.sum_groups, on);
     indirect[1] = 1u;
     indirect[2] = 1u;
+    indirect[3] = select(0u, params.inst_groups, on && params.sum_groups > 0u);
+    indirect[4] = 1u;
+    indirect[5] = 1u;
 }

@@ -397,6 +397,55 @@ fn parity_with_the_multi_level_reductions() {
     );
 }
 
+/// 300 one-element bodies, each moving at its own velocity: more sum instances than a reduction
+/// workgroup has lanes, so that the second level of the sums (`sum_instances`) and the
+/// history's body columns (spread over the control workgroup's lanes) are exercised, fused and
+/// not. Each body's velocity and the kinetic energy in every history row as on the CPU.
+#[test]
+fn many_bodies_sum_their_velocities_and_kinetic_energy_as_on_the_cpu() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let n = 300;
+    let mut s = String::from(
+        "[run]\nend_time = 3.0e-5\nhistory_interval = 3.0e-6\n\n\
+         [[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\ndensity = 7850.0\n\
+         youngs_modulus = 2.1e11\npoisson_ratio = 0.3\n",
+    );
+    for b in 0..n {
+        let (x, y) = ((b % 20) as f64 * 0.02, (b / 20) as f64 * 0.02);
+        let (vx, vy) = (1.0 + 0.1 * b as f64, -2.0 + 0.05 * (b % 7) as f64);
+        s.push_str(&format!(
+            "\n[[body]]\nname = \"b{b}\"\nmaterial = \"steel\"\n\
+             mesh = {{ rectangle = {{ origin = [{x:?}, {y:?}], size = [0.01, 0.01], cells = [1, 1] }} }}\n\
+             initial_velocity = [{vx:?}, {vy:?}]\n"
+        ));
+    }
+    for fused in [Some(true), Some(false)] {
+        let (sc, sg, _, _, _, _) = both(ctx.clone(), &s, "many_bodies", fused);
+        assert_eq!(sc.len(), sg.len(), "{fused:?}: same number of history rows");
+        assert!(sc.len() >= 4, "{fused:?}: {} rows", sc.len());
+        let mut dv: f64 = 0.0;
+        let mut de: f64 = 0.0;
+        for (a, b) in sc.iter().zip(&sg) {
+            assert_eq!(a.body_velocity.len(), n);
+            assert_eq!(b.body_velocity.len(), n);
+            for (p, q) in a.body_velocity.iter().zip(&b.body_velocity) {
+                dv = dv.max((p[0] - q[0]).hypot(p[1] - q[1]) / p[0].hypot(p[1]));
+            }
+            de = de.max((a.kinetic - b.kinetic).abs() / a.kinetic);
+        }
+        eprintln!("many bodies {fused:?}: velocity difference {dv:.2e}, kinetic {de:.2e} relative");
+        assert!(
+            dv < 1e-5,
+            "{fused:?}: body velocity difference {dv:e} relative"
+        );
+        assert!(
+            de < 1e-5,
+            "{fused:?}: kinetic energy difference {de:e} relative"
+        );
+    }
+}
+
 #[test]
 fn same_scene_twice_gives_identical_bits() {
     let Some(ctx) = context() else { return };
@@ -597,3 +646,49 @@ mod restart;
 mod stress;
 #[path = "gpu/verify.rs"]
 mod verify;
+
+/// `GpuSolver::profile_steps` records each part of a step in its own pass between timestamps:
+/// the same kernels in the same order, so the state after it is bit for bit that of
+/// `run_steps` (contact searches included), and every part of a contact scene takes time.
+#[test]
+fn profiled_steps_give_the_same_bits_and_time_every_part() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text = ricochet::bench::striker_text(6, true);
+    let (scene, model, plan) = load(&text, "striker.toml");
+    let steps = 120;
+    let mut plain =
+        GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu solver");
+    let taken = plain.run_steps(steps).expect("run");
+    let mut profiled =
+        GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu solver");
+    let profile = profiled.profile_steps(steps).expect("profile");
+    assert_eq!(plain.steps(), profiled.steps(), "steps taken");
+    assert!(
+        plain.counters().contact_searches > 1,
+        "searches in the profiled steps"
+    );
+    let bits = |x: Vec<[f64; 2]>| {
+        x.iter()
+            .map(|p| (p[0].to_bits(), p[1].to_bits()))
+            .collect::<Vec<_>>()
+    };
+    let (u0, v0) = plain.nodes().expect("nodes");
+    let (u1, v1) = profiled.nodes().expect("nodes");
+    assert_eq!(bits(u0), bits(u1), "displacements differ when profiled");
+    assert_eq!(bits(v0), bits(v1), "velocities differ when profiled");
+    match profile {
+        Some((k, parts)) => {
+            assert_eq!(k, taken);
+            assert_eq!(parts.len(), ricochet::gpu::solver::PROFILE_PARTS.len());
+            for (name, t) in ricochet::gpu::solver::PROFILE_PARTS.iter().zip(&parts) {
+                eprintln!("{name}: {:.1} us per step", t * 1e6);
+                assert!(*t > 0.0 && t.is_finite(), "{name}: {t} s per step");
+            }
+        }
+        None => assert!(
+            !ctx.timestamps,
+            "no profile although the adapter has timestamps"
+        ),
+    }
+}

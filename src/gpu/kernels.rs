@@ -29,6 +29,8 @@ pub struct Kernels {
     pub load_work: Option<wgpu::ComputePipeline>,
     /// First level of the sample sums.
     pub sum: wgpu::ComputePipeline,
+    /// Second level of the sample sums, one workgroup per instance.
+    pub sum_instances: wgpu::ComputePipeline,
     /// Second level of the sums, history row, time and flags.
     pub control_end: wgpu::ComputePipeline,
 }
@@ -55,6 +57,7 @@ impl Kernels {
                 .loads
                 .then(|| loads::work_pipeline(device, features)),
             sum: reduce::sum_pipeline(device, features),
+            sum_instances: reduce::sum_instances_pipeline(device, features),
             control_end: control::end_pipeline(device, features),
         }
     }

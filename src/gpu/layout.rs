@@ -29,6 +29,10 @@ pub struct Params {
     pub mass_damping: f32,
     pub loads: u32,
     pub plastic: u32,
+    pub inst_groups: u32,
+    pub _p0: u32,
+    pub _p1: u32,
+    pub _p2: u32,
 }
 
 /// Mirror of WGSL `Control`: the run state advanced on the GPU.
@@ -140,7 +144,7 @@ pub const STATE_FAILED: u32 = 3;
 /// "No index" marker.
 pub const NONE: u32 = u32::MAX;
 
-const _: () = assert!(std::mem::size_of::<Params>() == 80);
+const _: () = assert!(std::mem::size_of::<Params>() == 96);
 const _: () = assert!(std::mem::size_of::<Control>() == 84);
 const _: () = assert!(std::mem::size_of::<Instance>() == 32);
 const _: () = assert!(std::mem::size_of::<GpuBody>() == 80);

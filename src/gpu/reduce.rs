@@ -1,7 +1,8 @@
 //! First level of the reductions (`shaders/reduce.wgsl`): the element stable-step minimum with its
 //! element, and the sums of the sample instances. Each workgroup reads a strided set that depends
-//! only on the sizes, and sums in a fixed tree, so results are bit-reproducible. The second level
-//! runs in [`super::control`].
+//! only on the sizes, and sums in a fixed tree, so results are bit-reproducible. The sums' second
+//! level runs here too (`sum_instances`, one workgroup per instance, the same tree), the stable
+//! step's in [`super::control`].
 
 use super::kernels::{compute_pipeline, Features};
 
@@ -14,6 +15,20 @@ pub(crate) fn min_pipeline(device: &wgpu::Device, features: Features) -> wgpu::C
 
 pub(crate) fn sum_pipeline(device: &wgpu::Device, features: Features) -> wgpu::ComputePipeline {
     compute_pipeline(device, "sum", SOURCE, features, "sum", None)
+}
+
+pub(crate) fn sum_instances_pipeline(
+    device: &wgpu::Device,
+    features: Features,
+) -> wgpu::ComputePipeline {
+    compute_pipeline(
+        device,
+        "sum_instances",
+        SOURCE,
+        features,
+        "sum_instances",
+        None,
+    )
 }
 
 /// Workgroups of `rg` threads for a first-level reduction over `n` items (at most one per `rg`

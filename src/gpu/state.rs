@@ -18,6 +18,10 @@ use crate::contact::ContactSet;
 /// Nodes + elements + constraints up to which a CPU adapter reduces in one workgroup.
 pub const FUSED_LIMIT: usize = 1 << 14;
 
+/// Workgroups of the sums' second level at most (`sum_instances`; each takes every this-many-th
+/// instance beyond): the dispatch limit per dimension.
+pub const MAX_INST_GROUPS: u32 = 65535;
+
 /// Rows the history ring holds between readbacks, at most (fewer when a row is so wide, with many
 /// bodies, that the ring would exceed the device's largest storage binding; never fewer than the
 /// steps of one submission, [`super::solver::MAX_BATCH`]).
@@ -77,6 +81,7 @@ struct Binds {
     pressure: Option<wgpu::BindGroup>,
     load_work: Option<wgpu::BindGroup>,
     sum: wgpu::BindGroup,
+    sum_instances: wgpu::BindGroup,
     control_end: wgpu::BindGroup,
 }
 
@@ -361,6 +366,12 @@ impl GpuState {
             mass_damping: model.mass_damping as f32,
             loads: u32::from(has_loads),
             plastic: u32::from(plastic),
+            inst_groups: if fused {
+                0
+            } else {
+                (instances.len() as u32).min(MAX_INST_GROUPS)
+            },
+            ..Default::default()
         };
         let control = Control {
             flags: FLAG_SAMPLE
@@ -466,7 +477,7 @@ impl GpuState {
         );
         let times_buf = a.init("times", bytemuck::cast_slice(&times), storage);
         let inst_res = a.zeroed("instance_sums", 16 * instances.len() as u64, storage);
-        let indirect_init = [sum_groups, 1, 1];
+        let indirect_init = [sum_groups, 1, 1, params.inst_groups, 1, 1];
         let indirect = a.init(
             "indirect",
             bytemuck::cast_slice(&indirect_init),
@@ -607,6 +618,17 @@ impl GpuState {
                     (5, &sum_partial),
                 ],
             ),
+            sum_instances: bind(
+                device,
+                "sum_instances",
+                &kernels.sum_instances,
+                &[
+                    (0, &params_buf),
+                    (3, &instances_buf),
+                    (5, &sum_partial),
+                    (6, &inst_res),
+                ],
+            ),
             control_end: bind(
                 device,
                 "control_end",
@@ -615,7 +637,6 @@ impl GpuState {
                     (0, &params_buf),
                     (1, &ctrl),
                     (3, &instances_buf),
-                    (4, &sum_partial),
                     (5, &history),
                     (6, &times_buf),
                     (7, &indirect),
@@ -650,6 +671,13 @@ impl GpuState {
 
     /// Records one step into `pass`: element, stable step, node update, boundaries, samples, control.
     pub fn record_step(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
+        self.record_forces(kernels, pass);
+        self.record_update(kernels, pass);
+        self.record_tail(kernels, pass);
+    }
+
+    /// Records the first part of a step: element forces, the stable step and its control.
+    pub fn record_forces(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
         let b = &self.bind;
         pass.set_pipeline(&kernels.element);
         pass.set_bind_group(0, &b.element, &[]);
@@ -662,6 +690,11 @@ impl GpuState {
         pass.set_pipeline(&kernels.control_dt);
         pass.set_bind_group(0, &b.control_dt, &[]);
         pass.dispatch_workgroups(1, 1, 1);
+    }
+
+    /// Records the uncoupled update of a step: pressure loads, the node update, boundaries.
+    pub fn record_update(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
+        let b = &self.bind;
         if let (Some(p), Some(bg)) = (&kernels.pressure, &b.pressure) {
             pass.set_pipeline(p);
             pass.set_bind_group(0, bg, &[]);
@@ -675,16 +708,20 @@ impl GpuState {
             pass.set_bind_group(0, bg, &[]);
             pass.dispatch_workgroups(self.groups.boundary, 1, 1);
         }
-        self.record_tail(kernels, pass);
     }
 
     /// Records the end of a step from the contact stage on: contact, load work, sample sums, control.
     /// (After a search stopped a step in its contact stage, the host resumes it with this.)
     pub fn record_tail(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
-        let b = &self.bind;
         if let (Some(k), Some(c)) = (&kernels.contact, &self.contact) {
             c.record(k, pass);
         }
+        self.record_end(kernels, pass);
+    }
+
+    /// Records the last part of a step: load work, sample sums, the history row and control.
+    pub fn record_end(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
+        let b = &self.bind;
         if let (Some(p), Some(bg)) = (&kernels.load_work, &b.load_work) {
             pass.set_pipeline(p);
             pass.set_bind_group(0, bg, &[]);
@@ -694,6 +731,9 @@ impl GpuState {
             pass.set_pipeline(&kernels.sum);
             pass.set_bind_group(0, &b.sum, &[]);
             pass.dispatch_workgroups_indirect(&self.indirect, 0);
+            pass.set_pipeline(&kernels.sum_instances);
+            pass.set_bind_group(0, &b.sum_instances, &[]);
+            pass.dispatch_workgroups_indirect(&self.indirect, 12);
         }
         pass.set_pipeline(&kernels.control_end);
         pass.set_bind_group(0, &b.control_end, &[]);

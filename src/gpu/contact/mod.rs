@@ -39,6 +39,18 @@ pub const COMMON: &str = include_str!("../../../shaders/contact_common.wgsl");
 /// Control state set when a contact buffer must grow (WGSL `STATE_SEARCH_GROW`).
 pub const STATE_SEARCH_GROW: u32 = 4;
 
+/// [`ContactState::record_parts`]: the node preparation and the search plan.
+pub const PART_PREP: u32 = 1;
+/// [`ContactState::record_parts`]: the search kernels (empty dispatches when none is due).
+pub const PART_SEARCH: u32 = 2;
+/// [`ContactState::record_parts`]: the narrow phase and the gather of the constraints.
+pub const PART_NARROW: u32 = 4;
+/// [`ContactState::record_parts`]: the Lagrange correction (or the penalty forces).
+pub const PART_SOLVE: u32 = 8;
+/// [`ContactState::record_parts`]: the finish (node update) and the interface reports.
+pub const PART_REPORT: u32 = 16;
+/// [`ContactState::record_parts`]: the whole contact stage.
+pub const PART_ALL: u32 = 31;
 /// Colours at most (WGSL `MAX_COLORS`).
 pub const MAX_COLORS: u32 = 64;
 /// Sweep slots of the per-colour path (WGSL `MAX_SWEEP_SLOTS`).
@@ -679,6 +691,14 @@ impl ContactState {
 
     /// Records the contact stage of a step.
     pub fn record(&self, k: &ContactKernels, pass: &mut wgpu::ComputePass<'_>) {
+        self.record_parts(k, pass, PART_ALL);
+    }
+
+    /// Records the parts of the contact stage named by `parts` (a mask of [`PART_PREP`],
+    /// [`PART_SEARCH`], [`PART_NARROW`], [`PART_SOLVE`], [`PART_REPORT`]), in stage order: the
+    /// whole stage with [`PART_ALL`]; one part alone only for timing its kernels (the bench's
+    /// contact shares), since alone it works on whatever the other parts left.
+    pub fn record_parts(&self, k: &ContactKernels, pass: &mut wgpu::ComputePass<'_>, parts: u32) {
         let p = &self.params;
         let g = |n: u32| n.div_ceil(CG).max(1);
         // Group 0 is set once (offset 0) and again only where its index offset changes: every
@@ -690,12 +710,16 @@ impl ContactState {
             pass.set_pipeline(pl);
             pass.dispatch_workgroups(n, 1, 1);
         };
-        pass.set_pipeline(&k.prep);
         bind(pass, 0);
         pass.set_bind_group(1, &self.ind_bind, &[]);
-        pass.dispatch_workgroups(g(p.n_local), 1, 1);
-        direct(pass, &k.plan, 1);
+        if parts & PART_PREP != 0 {
+            direct(pass, &k.prep, g(p.n_local));
+            direct(pass, &k.plan, 1);
+        }
         for (e, pl) in k.search.iter().enumerate() {
+            if parts & PART_SEARCH == 0 {
+                break;
+            }
             // The one-workgroup solve colours the step's constraints itself: no colouring of
             // the slots at the search.
             if p.multi == 0 && e >= 11 {
@@ -716,11 +740,14 @@ impl ContactState {
             pass.set_pipeline(pl);
             pass.dispatch_workgroups_indirect(&self.ind, 12 * e as u64);
         }
-        direct(pass, &k.narrow, g(p.n_slots));
-        direct(pass, &k.gather, g(p.n_local));
-        if p.multi == 0 {
+        if parts & PART_NARROW != 0 {
+            direct(pass, &k.narrow, g(p.n_slots));
+            direct(pass, &k.gather, g(p.n_local));
+        }
+        let solve = parts & PART_SOLVE != 0;
+        if solve && p.multi == 0 {
             direct(pass, &k.solve_one, 1);
-        } else {
+        } else if solve {
             let rounds = MAX_SWEEP_SLOTS / p.max_sweeps;
             for r in 0..rounds {
                 pass.set_pipeline(&k.sweep_color);
@@ -739,9 +766,11 @@ impl ContactState {
             }
             bind(pass, 0);
         }
-        direct(pass, &k.finish, g(p.n_local));
-        direct(pass, &k.report_slots, g(p.n_slots));
-        direct(pass, &k.report_end, 1);
+        if parts & PART_REPORT != 0 {
+            direct(pass, &k.finish, g(p.n_local));
+            direct(pass, &k.report_slots, g(p.n_slots));
+            direct(pass, &k.report_end, 1);
+        }
     }
 
     /// Gives the candidate buffer room for `cap` candidates (a new, zeroed buffer, bound in

@@ -20,4 +20,10 @@ pub const TOLERANCE: f64 = 1e-4;
 
 /// Slots from which the per-colour path is used on a discrete or integrated GPU. On CPU adapters
 /// (lavapipe) a dispatch costs more than a colour's work, and the one-workgroup path is used.
-pub const MULTI_SLOTS: usize = 4096;
+///
+/// Measured on an NVIDIA H100 (BENCHMARKS.md, GPU timestamps per stage): the per-colour path
+/// records its sweeps ahead, 80 sweeps x 8 colours of indirect dispatches a step, and these cost
+/// about 2.8 ms of device time a step even when empty, against 5 us to 1.9 ms for the
+/// one-workgroup solve on every bench scene up to 10^6 elements (the striker at 10^6: 1.86 ms
+/// with 65 sweeps a step, against 3.53 ms). So the one workgroup is used up to 2^20 slots.
+pub const MULTI_SLOTS: usize = 1 << 20;
