@@ -16,6 +16,7 @@ pub mod bench;
 pub mod checkpoint;
 pub mod contact;
 pub mod error;
+pub mod gmsh;
 pub mod gpu;
 pub mod mesh;
 pub mod model;

@@ -819,6 +819,30 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             b.params.dilatational_speed(),
             b.params.hourglass
         );
+        if let Some(ricochet::scene::MeshSpec::Gmsh { file, group, mesh }) = scene
+            .bodies
+            .iter()
+            .find(|sb| sb.name == b.name)
+            .map(|sb| &sb.mesh)
+        {
+            println!(
+                "           Gmsh {} group `{group}`: {} quads (4-node), {} nodes{}",
+                file.display(),
+                mesh.quads.len(),
+                mesh.nodes.len(),
+                if mesh.reoriented > 0 {
+                    format!(", {} turned counter-clockwise", mesh.reoriented)
+                } else {
+                    String::new()
+                }
+            );
+            if let Some((i, area, edge)) = mesh.smallest() {
+                println!(
+                    "           smallest element: Gmsh tag {}, area {area:.4e} m^2, shortest edge {edge:.4e} m",
+                    mesh.element_tags[i]
+                );
+            }
+        }
         if b.params.formulation == ricochet::scene::Formulation::Axisymmetric {
             println!("           axisymmetric (x = r; masses, forces and energies per radian)");
         }

@@ -27,6 +27,7 @@ impl Mesh {
                 ref nodes,
                 ref quads,
             } => explicit(nodes, quads),
+            MeshSpec::Gmsh { ref mesh, .. } => explicit(&mesh.nodes, &mesh.quads),
             MeshSpec::Rectangle {
                 origin,
                 size,

@@ -38,6 +38,7 @@ pub fn element_counts(scene: &Scene) -> Vec<u64> {
         .iter()
         .map(|b| match &b.mesh {
             MeshSpec::Explicit { quads, .. } => quads.len() as u64,
+            MeshSpec::Gmsh { mesh, .. } => mesh.quads.len() as u64,
             MeshSpec::Rectangle { cells, .. } => cells[0] as u64 * cells[1] as u64,
             // The O-grid: a c x c core and four c x (c / 2) blocks.
             MeshSpec::Disk { cells, .. } => 3 * (*cells as u64) * (*cells as u64),
@@ -122,6 +123,9 @@ fn largest_mesh(scene: &Scene) -> (String, String) {
         ),
         Some(crate::scene::MeshSpec::Disk { cells, .. }) => {
             (format!("body[{bi}].mesh.disk.cells"), format!("{cells}"))
+        }
+        Some(crate::scene::MeshSpec::Gmsh { .. }) => {
+            (format!("body[{bi}].mesh.gmsh"), format!("{n} quads"))
         }
         Some(crate::scene::MeshSpec::Explicit { .. }) | None => {
             (format!("body[{bi}].mesh.quads"), format!("{n} quads"))

@@ -213,6 +213,8 @@ struct RawMesh {
     nodes: Option<Vec<[f64; 2]>>,
     #[serde(default, deserialize_with = "fixed::list")]
     quads: Option<Vec<[i64; 4]>>,
+    gmsh: Option<String>,
+    group: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -398,6 +400,15 @@ pub enum MeshSpec {
         cells: usize,
         /// Grading toward a rim point (a contact point), if any.
         refine: Option<DiskRefinement>,
+    },
+    /// The quads of one physical surface of a Gmsh MSH 4.1 file (read when the scene is).
+    Gmsh {
+        /// The mesh file (relative paths resolved against the scene file's folder).
+        file: PathBuf,
+        /// The physical surface's name.
+        group: String,
+        /// What was read (counter-clockwise quads, with their Gmsh tags).
+        mesh: crate::gmsh::SurfaceMesh,
     },
 }
 
@@ -1468,13 +1479,42 @@ impl Validator<'_> {
             m.rectangle.is_some(),
             m.disk.is_some(),
             m.nodes.is_some() || m.quads.is_some(),
+            m.gmsh.is_some() || m.group.is_some(),
         ];
         if given.iter().filter(|g| **g).count() != 1 {
             return Err(self.invalid(
                 key,
                 "{...}",
-                "give exactly one of `rectangle = {...}`, `disk = {...}` or `nodes = [...], quads = [...]`",
+                "give exactly one of `rectangle = {...}`, `disk = {...}`, `nodes = [...], quads = [...]` \
+                 or `gmsh = \"file.msh\", group = \"name\"`",
             ));
+        }
+        if m.gmsh.is_some() || m.group.is_some() {
+            let (Some(file), Some(group)) = (&m.gmsh, &m.group) else {
+                return Err(self.invalid(
+                    key,
+                    "{...}",
+                    "a Gmsh mesh needs both `gmsh` (the .msh file) and `group` (a physical surface)",
+                ));
+            };
+            let path = self
+                .file
+                .parent()
+                .map_or_else(|| PathBuf::from(file), |d| d.join(file));
+            let read = crate::gmsh::read_bytes(&path)
+                .and_then(|bytes| crate::gmsh::read_surface(&bytes, group));
+            return match read {
+                Ok(mesh) => Ok(MeshSpec::Gmsh {
+                    file: path,
+                    group: group.clone(),
+                    mesh,
+                }),
+                Err(problem) => Err(self.invalid(
+                    format!("{key}.gmsh"),
+                    format!("{file:?}"),
+                    &format!("{}: {problem}", path.display()),
+                )),
+            };
         }
         if m.nodes.is_some() || m.quads.is_some() {
             let (Some(nodes), Some(quads)) = (&m.nodes, &m.quads) else {

@@ -2,7 +2,8 @@
 //!
 //! One test binary (to keep link time down) with one module per topic under `tests/core/`:
 //!
-//! - [`patch`]: constant-strain patch tests (single quad, distorted patches), exact stress;
+//! - [`patch`]: constant-strain patch tests (single quad, distorted patches, a Gmsh mesh), exact stress;
+//! - [`gmsh`]: the shipped Gmsh MSH 4.1 meshes (counts, ASCII against binary, orientation);
 //! - [`rigid`]: rigid translation and (large) rotation of neo-Hookean elements, spinning disk;
 //! - [`hourglass`]: hourglass modes, their control (stiffness, viscous) and reported energy;
 //! - [`mass`]: lumped mass and momentum conservation;
@@ -50,6 +51,8 @@ mod energy;
 mod fuzz;
 #[path = "core/general_contact.rs"]
 mod general_contact;
+#[path = "core/gmsh.rs"]
+mod gmsh;
 #[path = "core/hourglass.rs"]
 mod hourglass;
 #[path = "core/mass.rs"]

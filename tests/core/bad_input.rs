@@ -1188,3 +1188,104 @@ fn bulk_viscosity_quadratic_is_bounded() {
     );
     expect_accepted("bulk_quadratic_10", &text, true);
 }
+
+/// A scene whose body `part` is group `group` of the mesh file `mesh` (absolute path).
+fn gmsh_scene(mesh: &std::path::Path, group: &str) -> String {
+    format!(
+        "{RUN}{MATERIAL}\n[[body]]\nname = \"part\"\nmaterial = \"steel\"\n\
+         mesh = {{ gmsh = {:?}, group = {group:?} }}\n",
+        mesh.to_string_lossy()
+    )
+}
+
+#[test]
+fn bad_gmsh_meshes_name_the_file_the_group_and_the_problem() {
+    use crate::gmsh::{edit_quads, test_mesh};
+    let square = test_mesh("square.msh");
+    expect_accepted("gmsh_ok", &gmsh_scene(&square, "square"), true);
+    let key = "body[0].mesh.gmsh";
+    let missing = test_mesh("no_such_file.msh");
+    expect_rejected(
+        "gmsh_missing_file",
+        &gmsh_scene(&missing, "square"),
+        &[key, "no_such_file.msh", "cannot read the mesh file"],
+    );
+    expect_rejected(
+        "gmsh_msh2",
+        &gmsh_scene(&test_mesh("square_v22.msh"), "square"),
+        &[key, "square_v22.msh", "MSH format version 2.2", "4.1"],
+    );
+    expect_rejected(
+        "gmsh_no_group",
+        &gmsh_scene(&square, "bracket"),
+        &[
+            key,
+            "square.msh",
+            "no physical surface named `bracket`",
+            "square",
+        ],
+    );
+    expect_rejected(
+        "gmsh_curve_group",
+        &gmsh_scene(&square, "left"),
+        &[key, "group `left` is a physical curve, not a surface"],
+    );
+    expect_rejected(
+        "gmsh_point_group",
+        &gmsh_scene(&square, "corner"),
+        &[key, "group `corner` is a physical point"],
+    );
+    expect_rejected(
+        "gmsh_second_order",
+        &gmsh_scene(&test_mesh("square_order2.msh"), "square"),
+        &[
+            key,
+            "square_order2.msh",
+            "group `square`",
+            "64 x Qua9 (Gmsh type 10)",
+        ],
+    );
+    expect_rejected(
+        "gmsh_triangles",
+        &gmsh_scene(&test_mesh("square_triangles.msh"), "square"),
+        &[key, "32 x Tri3 (Gmsh type 2)", "RecombineAll"],
+    );
+    // An inverted (bow-tie) element: the first quad's second and third nodes swapped.
+    let text = std::fs::read_to_string(&square).expect("square.msh");
+    let mut first = true;
+    let bowtie = edit_quads(&text, |n| {
+        let out = if first {
+            vec![n[0], n[2], n[1], n[3]]
+        } else {
+            n.to_vec()
+        };
+        first = false;
+        out.iter().map(|s| s.to_string()).collect()
+    });
+    let dir = tmp_dir("bad-gmsh-inverted-mesh");
+    let inverted = dir.join("inverted.msh");
+    std::fs::write(&inverted, bowtie).expect("write");
+    let err = expect_rejected(
+        "gmsh_inverted",
+        &gmsh_scene(&inverted, "square"),
+        &[
+            key,
+            "inverted.msh",
+            "element",
+            "is inverted or has zero area",
+        ],
+    );
+    // It names the Gmsh tag and the nodes of the first quad as the file gives them.
+    let line = text
+        .lines()
+        .skip_while(|l| l.trim() != "2 1 3 64")
+        .nth(1)
+        .expect("first quad");
+    let t: Vec<&str> = line.split_whitespace().collect();
+    let named = format!(
+        "element {} of group `square` (nodes {} {} {} {})",
+        t[0], t[1], t[3], t[2], t[4]
+    );
+    assert!(err.contains(&named), "{err}\ndoes not contain {named}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,200 @@
+//! Gmsh meshes (`mesh = { gmsh = "...", group = "..." }`): the shipped MSH 4.1 files read with the
+//! counts Gmsh wrote (its own report when it meshed them), ASCII and binary alike; the asset scene
+//! that uses them runs. Bad Gmsh input is in `bad_input.rs`, the patch test on a Gmsh mesh in
+//! `patch.rs`.
+
+use std::path::{Path, PathBuf};
+
+use ricochet::gmsh::{physical_names, read_bytes, read_surface, version};
+
+use crate::common::*;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A test mesh of `tests/data/gmsh/`.
+pub fn test_mesh(name: &str) -> PathBuf {
+    root().join("tests/data/gmsh").join(name)
+}
+
+fn surface(path: &Path, group: &str) -> ricochet::gmsh::SurfaceMesh {
+    let bytes = read_bytes(path).expect("mesh file");
+    read_surface(&bytes, group).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn shipped_meshes_have_the_counts_gmsh_wrote_ascii_and_binary_alike() {
+    // Gmsh 4.15 reported, meshing assets/gmsh/notched_plate.geo: 5860 4-node quads, 6092 nodes
+    // (the two circle centres are geometry points without elements); tests/data/gmsh/square.geo:
+    // 64 quads on 81 nodes.
+    let plate = root().join("assets/gmsh/notched_plate.msh");
+    let binary = root().join("assets/gmsh/notched_plate_binary.msh");
+    for path in [&plate, &binary] {
+        let bytes = read_bytes(path).expect("mesh file");
+        assert_eq!(version(&bytes).expect("version"), "4.1");
+        let names = physical_names(&bytes).expect("names");
+        let mut listed: Vec<(i32, &str)> = names.iter().map(|n| (n.dim, n.name.as_str())).collect();
+        listed.sort();
+        assert_eq!(
+            listed,
+            [
+                (1, "clamp"),
+                (1, "notch"),
+                (1, "plate_top"),
+                (1, "striker_face"),
+                (2, "plate"),
+                (2, "striker")
+            ]
+        );
+        let p = surface(path, "plate");
+        let s = surface(path, "striker");
+        assert_eq!(
+            (p.quads.len(), p.nodes.len()),
+            (5424, 5617),
+            "{}",
+            path.display()
+        );
+        assert_eq!(
+            (s.quads.len(), s.nodes.len()),
+            (436, 473),
+            "{}",
+            path.display()
+        );
+        assert_eq!(p.quads.len() + s.quads.len(), 5860);
+        // Node tags are Gmsh's: 6092 in the file, of which the two bodies use all but the two
+        // circle centres.
+        let mut tags: Vec<u64> = p.node_tags.iter().chain(&s.node_tags).copied().collect();
+        tags.sort_unstable();
+        tags.dedup();
+        assert_eq!(tags.len(), 6090);
+        assert!(*tags.last().expect("tags") <= 6092);
+    }
+    // The binary file holds the same mesh: the same tags and quads, and the coordinates to the
+    // 16 significant digits that Gmsh prints in ASCII (1e-15 of the extent).
+    let same = |a: &ricochet::gmsh::SurfaceMesh, b: &ricochet::gmsh::SurfaceMesh, what: &str| {
+        assert!(a.quads == b.quads, "{what}: the quads differ");
+        assert!(a.node_tags == b.node_tags, "{what}: the node tags differ");
+        assert!(
+            a.element_tags == b.element_tags,
+            "{what}: the element tags differ"
+        );
+        let d = a
+            .nodes
+            .iter()
+            .zip(&b.nodes)
+            .map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
+            .fold(0.0f64, f64::max);
+        let extent = a
+            .nodes
+            .iter()
+            .map(|p| p[0].abs().max(p[1].abs()))
+            .fold(0.0f64, f64::max);
+        assert!(
+            d <= 1e-15 * extent,
+            "{what}: coordinates differ by {d:e} m (extent {extent} m)"
+        );
+    };
+    same(
+        &surface(&plate, "plate"),
+        &surface(&binary, "plate"),
+        "plate",
+    );
+    let sq = surface(&test_mesh("square.msh"), "square");
+    assert_eq!((sq.quads.len(), sq.nodes.len()), (64, 81));
+    same(
+        &sq,
+        &surface(&test_mesh("square_binary.msh"), "square"),
+        "square",
+    );
+    // Every quad counter-clockwise with positive area, and the areas fill the square.
+    let area: f64 = sq
+        .quads
+        .iter()
+        .map(|q| {
+            let c = q.map(|n| sq.nodes[n as usize]);
+            let a = 0.5
+                * ((c[2][0] - c[0][0]) * (c[3][1] - c[1][1])
+                    - (c[3][0] - c[1][0]) * (c[2][1] - c[0][1]));
+            assert!(a > 0.0, "quad {q:?} has area {a}");
+            a
+        })
+        .sum();
+    assert!((area - 1.0).abs() < 1e-12, "areas sum to {area}");
+}
+
+#[test]
+fn clockwise_quads_are_turned_and_counted() {
+    // The same square with every quad written clockwise (node order reversed in the file).
+    let text = std::fs::read_to_string(test_mesh("square.msh")).expect("square.msh");
+    let flipped = reverse_quads(&text);
+    let m = read_surface(flipped.as_bytes(), "square").expect("flipped square");
+    let original = surface(&test_mesh("square.msh"), "square");
+    assert_eq!(m.reoriented, 64);
+    assert_eq!(original.reoriented, 0);
+    assert_eq!(m.nodes, original.nodes);
+    // Counter-clockwise again: the same cycle of nodes, possibly from another corner.
+    for (q, o) in m.quads.iter().zip(&original.quads) {
+        let k = o.iter().position(|n| *n == q[0]).expect("same nodes");
+        assert_eq!(*q, [o[k], o[(k + 1) % 4], o[(k + 2) % 4], o[(k + 3) % 4]]);
+    }
+}
+
+/// `text` (an ASCII MSH 4.1 file) with the node order of every 4-node quad reversed.
+pub fn reverse_quads(text: &str) -> String {
+    edit_quads(text, |n| {
+        [n[0], n[3], n[2], n[1]].map(String::from).to_vec()
+    })
+}
+
+/// `text` with each quad's node tags (in the Elements section's 4-node-quad blocks) replaced by
+/// `f` of them.
+pub fn edit_quads(text: &str, mut f: impl FnMut(&[&str]) -> Vec<String>) -> String {
+    let mut out = String::new();
+    let mut in_elements = false;
+    let mut left_in_block = 0usize;
+    let mut quad_block = false;
+    let mut header_seen = false;
+    for line in text.lines() {
+        let mut l = line.to_string();
+        if line.starts_with("$Elements") {
+            in_elements = true;
+            header_seen = false;
+        } else if line.starts_with("$EndElements") {
+            in_elements = false;
+        } else if in_elements {
+            let t: Vec<&str> = line.split_whitespace().collect();
+            if !header_seen {
+                header_seen = true;
+            } else if left_in_block == 0 {
+                // Block header: entity dim, entity tag, element type, count.
+                quad_block = t[2] == "3";
+                left_in_block = t[3].parse().expect("count");
+            } else {
+                if quad_block {
+                    let nodes: Vec<String> = f(&t[1..5]);
+                    l = format!("{} {} ", t[0], nodes.join(" "));
+                }
+                left_in_block -= 1;
+            }
+        }
+        out.push_str(&l);
+        out.push('\n');
+    }
+    out
+}
+
+#[test]
+fn the_notched_plate_asset_runs_on_the_cpu_reference() {
+    let dir = tmp_dir("gmsh-notched-plate");
+    let o = run_cpu(&root().join("assets/notched_plate.toml"), &dir, &[]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let summary = std::fs::read_to_string(dir.join("summary.json")).expect("summary");
+    assert!(summary.contains("\"completed\""), "{summary}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,25 @@
+// Test mesh: a unit square (1 m) of unstructured first-order quads, with its edges named.
+SetFactory("Built-in");
+lc = 0.3;
+Point(1) = {0, 0, 0, lc};
+Point(2) = {1, 0, 0, lc};
+Point(3) = {1, 1, 0, lc};
+Point(4) = {0, 1, 0, lc};
+Point(5) = {0.45, 0.55, 0, lc};
+Line(1) = {1, 2};
+Line(2) = {2, 3};
+Line(3) = {3, 4};
+Line(4) = {4, 1};
+Curve Loop(1) = {1, 2, 3, 4};
+Plane Surface(1) = {1};
+Point{5} In Surface{1};
+Physical Surface("square") = {1};
+Physical Curve("bottom") = {1};
+Physical Curve("right") = {2};
+Physical Curve("top") = {3};
+Physical Curve("left") = {4};
+Physical Point("corner") = {1};
+Mesh.Algorithm = 8;
+Mesh.RecombineAll = 1;
+Mesh.SubdivisionAlgorithm = 1;
+Mesh.MshFileVersion = 4.1;
