@@ -26,6 +26,23 @@ pub struct SurfaceMesh {
     pub element_tags: Vec<u64>,
     /// Quads that were clockwise in the file and were turned counter-clockwise.
     pub reoriented: usize,
+    /// The physical curves and points of the file that touch this surface, as node sets and
+    /// edges of this surface's nodes (for `region = { group = "..." }`).
+    pub groups: Vec<NodeGroup>,
+}
+
+/// A physical curve or point of a mesh file, restricted to one surface's nodes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeGroup {
+    /// Its name in `$PhysicalNames`.
+    pub name: String,
+    /// 1 for a curve, 0 for a point.
+    pub dim: i32,
+    /// Indices into [`SurfaceMesh::nodes`], ascending.
+    pub nodes: Vec<u32>,
+    /// The curve's 2-node line elements whose two nodes are in the surface, as indices into
+    /// [`SurfaceMesh::nodes`] (none for a point).
+    pub edges: Vec<[u32; 2]>,
 }
 
 /// A physical group named in `$PhysicalNames`.
@@ -355,11 +372,79 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
         quads.push(l);
         element_tags.push(*etag);
     }
+    let groups = node_groups(data, &names, &index);
     Ok(SurfaceMesh {
         nodes,
         node_tags,
         quads,
         element_tags,
         reoriented,
+        groups,
     })
+}
+
+/// The physical curves and points of the file restricted to the nodes in `index` (Gmsh tag to
+/// surface index): the nodes of their 2-node lines and points, and the lines with both nodes in.
+fn node_groups(
+    data: &mshio::mshfile::MshData<u64, i32, f64>,
+    names: &[PhysicalName],
+    index: &HashMap<u64, u32>,
+) -> Vec<NodeGroup> {
+    let Some(entities) = &data.entities else {
+        return Vec::new();
+    };
+    let Some(elements) = &data.elements else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for n in names.iter().filter(|n| n.dim == 0 || n.dim == 1) {
+        let tags: HashSet<i32> = if n.dim == 0 {
+            entities
+                .points
+                .iter()
+                .filter(|e| e.physical_tags.iter().any(|&p| p.abs() == n.tag))
+                .map(|e| e.tag)
+                .collect()
+        } else {
+            entities
+                .curves
+                .iter()
+                .filter(|e| e.physical_tags.iter().any(|&p| p.abs() == n.tag))
+                .map(|e| e.tag)
+                .collect()
+        };
+        let mut nodes = BTreeSet::new();
+        let mut edges = Vec::new();
+        for b in &elements.element_blocks {
+            if b.entity_dim != n.dim || !tags.contains(&b.entity_tag) {
+                continue;
+            }
+            for e in &b.elements {
+                let local: Vec<u32> = e
+                    .nodes
+                    .iter()
+                    .filter_map(|t| index.get(t).copied())
+                    .collect();
+                match b.element_type {
+                    ElementType::Lin2 if local.len() == 2 => {
+                        edges.push([local[0], local[1]]);
+                        nodes.extend(local);
+                    }
+                    ElementType::Pnt if local.len() == 1 => {
+                        nodes.extend(local);
+                    }
+                    _ => {}
+                }
+            }
+        }
+        if !nodes.is_empty() {
+            out.push(NodeGroup {
+                name: n.name.clone(),
+                dim: n.dim,
+                nodes: nodes.into_iter().collect(),
+                edges,
+            });
+        }
+    }
+    out
 }

@@ -255,10 +255,20 @@ impl Model {
         let mut cons: Vec<Option<NodeConstraint>> = vec![None; m.position.len()];
         for b in &scene.boundaries {
             let range = m.bodies[b.body].nodes.clone();
+            let named: Option<std::collections::HashSet<usize>> = b
+                .group
+                .as_ref()
+                .map(|g| g.nodes.iter().map(|&i| range.start + i as usize).collect());
             let mut hit = 0;
             for n in range {
                 let p = m.position[n];
-                if p[0] >= b.min[0] && p[0] <= b.max[0] && p[1] >= b.min[1] && p[1] <= b.max[1] {
+                let selected = match &named {
+                    Some(set) => set.contains(&n),
+                    None => {
+                        p[0] >= b.min[0] && p[0] <= b.max[0] && p[1] >= b.min[1] && p[1] <= b.max[1]
+                    }
+                };
+                if selected {
                     hit += 1;
                     let c = cons[n].get_or_insert(NodeConstraint {
                         node: n as u32,
@@ -331,16 +341,24 @@ impl Model {
         for p in &scene.pressures {
             let load = m.pressure_load(p, &scene.bodies[p.body]);
             if load.edges == 0 {
-                return Err(scene::invalid(
-                    scene,
-                    format!("{}.region", p.key),
-                    format!("{{ min = {:?}, max = {:?} }}", p.min, p.max),
-                    &format!(
-                        "the box selects no boundary edge of body {:?} (both end nodes of an edge \
-                         must lie in the box)",
-                        scene.bodies[p.body].name
+                let body = &scene.bodies[p.body].name;
+                return Err(match &p.group {
+                    Some(g) => scene::invalid(
+                        scene,
+                        format!("{}.region.group", p.key),
+                        format!("{:?}", g.name),
+                        &format!("none of the curve's edges is on the boundary of body {body:?}"),
                     ),
-                ));
+                    None => scene::invalid(
+                        scene,
+                        format!("{}.region", p.key),
+                        format!("{{ min = {:?}, max = {:?} }}", p.min, p.max),
+                        &format!(
+                            "the box selects no boundary edge of body {body:?} (both end nodes \
+                             of an edge must lie in the box)"
+                        ),
+                    ),
+                });
             }
             m.pressures.push(load);
         }
@@ -357,11 +375,26 @@ impl Model {
             let x = self.position[n as usize];
             x[0] >= p.min[0] && x[0] <= p.max[0] && x[1] >= p.min[1] && x[1] <= p.max[1]
         };
+        // A named curve: its own line elements (either direction), on the body's boundary.
+        let start = self.bodies[p.body].nodes.start as u32;
+        let named: Option<std::collections::HashSet<(u32, u32)>> = p.group.as_ref().map(|g| {
+            g.edges
+                .iter()
+                .flat_map(|e| {
+                    let (a, b) = (start + e[0], start + e[1]);
+                    [(a, b), (b, a)]
+                })
+                .collect()
+        });
         let mut force: std::collections::BTreeMap<u32, [f64; 2]> = Default::default();
         let mut edges = 0;
         for seg in &surface.segments {
             let [a, b] = seg.nodes;
-            if !(inside(a) && inside(b)) {
+            let selected = match &named {
+                Some(set) => set.contains(&(a, b)),
+                None => inside(a) && inside(b),
+            };
+            if !selected {
                 continue;
             }
             edges += 1;

@@ -264,10 +264,11 @@ struct RawBoundary {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawRegion {
-    #[serde(deserialize_with = "fixed::array")]
-    min: [f64; 2],
-    #[serde(deserialize_with = "fixed::array")]
-    max: [f64; 2],
+    #[serde(default, deserialize_with = "fixed::option")]
+    min: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "fixed::option")]
+    max: Option<[f64; 2]>,
+    group: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -457,8 +458,23 @@ pub struct Boundary {
     pub vx: Option<f64>,
     /// Prescribed y velocity, if any.
     pub vy: Option<f64>,
+    /// The physical curve or point of the body's mesh file that selects the nodes instead of
+    /// the box (`region = { group = "..." }`).
+    pub group: Option<RegionGroup>,
     /// Key prefix used in messages (`boundary[i]`).
     pub key: String,
+}
+
+/// A region given by name: a physical curve or point of the body's Gmsh file, as that body's
+/// nodes and edges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RegionGroup {
+    /// The group's name.
+    pub name: String,
+    /// Node indices within the body (its mesh's numbering), ascending.
+    pub nodes: Vec<u32>,
+    /// The curve's line elements within the body, as pairs of body node indices.
+    pub edges: Vec<[u32; 2]>,
 }
 
 /// How a contact constraint is enforced.
@@ -529,6 +545,9 @@ pub struct Pressure {
     pub value: f64,
     /// Duration of the linear ramp from 0 (s), if any; constant afterwards.
     pub ramp: Option<f64>,
+    /// The physical curve of the body's mesh file whose boundary edges are loaded, instead of
+    /// the box (`region = { group = "..." }`).
+    pub group: Option<RegionGroup>,
     /// Key prefix used in messages (`pressure[i]`).
     pub key: String,
 }
@@ -1696,7 +1715,7 @@ impl Validator<'_> {
                     &format!("no body of that name (defined: {known:?})"),
                 )
             })?;
-        self.region(key, &b.region)?;
+        let (min, max, group) = self.region(key, &b.region, &bodies[body], 0)?;
         if b.velocity.x.is_none() && b.velocity.y.is_none() {
             return Err(self.invalid(
                 format!("{key}.velocity"),
@@ -1712,35 +1731,102 @@ impl Validator<'_> {
         }
         Ok(Boundary {
             body,
-            min: b.region.min,
-            max: b.region.max,
+            min,
+            max,
             vx: b.velocity.x,
             vy: b.velocity.y,
+            group,
             key: key.to_string(),
         })
     }
 }
 
 impl Validator<'_> {
-    /// A box `{ min, max }`: finite, min <= max component-wise.
-    fn region(&self, key: &str, r: &RawRegion) -> Result<()> {
-        for i in 0..2 {
-            self.finite(&format!("{key}.region.min"), r.min[i])?;
-            self.finite(&format!("{key}.region.max"), r.max[i])?;
-            if r.min[i] > r.max[i] {
+    /// A box `{ min, max }` (finite, min <= max component-wise), or `{ group = "name" }`: a
+    /// physical curve (or, where `min_dim` is 0, a point) of the Gmsh file `body` was read from,
+    /// as that body's nodes and edges. Returns the box (unbounded for a group) and the group.
+    fn region(
+        &self,
+        key: &str,
+        r: &RawRegion,
+        body: &Body,
+        min_dim: i32,
+    ) -> Result<([f64; 2], [f64; 2], Option<RegionGroup>)> {
+        let rk = format!("{key}.region");
+        if let Some(name) = &r.group {
+            if r.min.is_some() || r.max.is_some() {
                 return Err(self.invalid(
-                    format!("{key}.region"),
-                    format!("min = {:?}, max = {:?}", r.min, r.max),
+                    rk,
+                    format!("{{ group = {name:?}, ... }}"),
+                    "give either `group` or `min` and `max`, not both",
+                ));
+            }
+            let gk = format!("{rk}.group");
+            let MeshSpec::Gmsh { file, mesh, .. } = &body.mesh else {
+                return Err(self.invalid(
+                    gk,
+                    format!("{name:?}"),
+                    &format!(
+                        "body {:?} is not read from a Gmsh file: a region by name is a physical \
+                         curve or point of the body's mesh file",
+                        body.name
+                    ),
+                ));
+            };
+            let Some(g) = mesh.groups.iter().find(|g| g.name == *name) else {
+                let known: Vec<&str> = mesh.groups.iter().map(|g| g.name.as_str()).collect();
+                return Err(self.invalid(
+                    gk,
+                    format!("{name:?}"),
+                    &format!(
+                        "{} has no physical curve or point of that name on body {:?} (there: {known:?})",
+                        file.display(),
+                        body.name
+                    ),
+                ));
+            };
+            if g.dim < min_dim {
+                return Err(self.invalid(
+                    gk,
+                    format!("{name:?}"),
+                    &format!(
+                        "{}: group `{name}` is a physical point; a pressure needs a physical curve",
+                        file.display()
+                    ),
+                ));
+            }
+            let group = RegionGroup {
+                name: name.clone(),
+                nodes: g.nodes.clone(),
+                edges: g.edges.clone(),
+            };
+            return Ok(([f64::NEG_INFINITY; 2], [f64::INFINITY; 2], Some(group)));
+        }
+        let (Some(min), Some(max)) = (r.min, r.max) else {
+            return Err(self.invalid(
+                rk,
+                "{...}",
+                "give `min = [x, y]` and `max = [x, y]` (a box), or `group = \"name\"` (a physical \
+                 curve or point of the body's Gmsh file)",
+            ));
+        };
+        for i in 0..2 {
+            self.finite(&format!("{rk}.min"), min[i])?;
+            self.finite(&format!("{rk}.max"), max[i])?;
+            if min[i] > max[i] {
+                return Err(self.invalid(
+                    rk,
+                    format!("min = {min:?}, max = {max:?}"),
                     "min must not exceed max",
                 ));
             }
         }
-        Ok(())
+        Ok((min, max, None))
     }
 
     fn pressure(&self, key: &str, p: &RawPressure, bodies: &[Body]) -> Result<Pressure> {
         let body = self.body_index(&format!("{key}.body"), &p.body, bodies)?;
-        self.region(key, &p.region)?;
+        let (min, max, group) = self.region(key, &p.region, &bodies[body], 1)?;
         let value = self.finite(&format!("{key}.value"), p.value)?;
         let ramp = p
             .ramp
@@ -1748,10 +1834,11 @@ impl Validator<'_> {
             .transpose()?;
         Ok(Pressure {
             body,
-            min: p.region.min,
-            max: p.region.max,
+            min,
+            max,
             value,
             ramp,
+            group,
             key: key.to_string(),
         })
     }

@@ -1289,3 +1289,56 @@ fn bad_gmsh_meshes_name_the_file_the_group_and_the_problem() {
     assert!(err.contains(&named), "{err}\ndoes not contain {named}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn bad_regions_by_group_name_the_key_and_the_group() {
+    use crate::gmsh::test_mesh;
+    let square = gmsh_scene(&test_mesh("square.msh"), "square");
+    let table = |t: &str, region: &str, rest: &str| {
+        format!("{square}\n[[{t}]]\nbody = \"part\"\nregion = {region}\n{rest}\n")
+    };
+    let v = "velocity = { y = 0.0 }";
+    expect_rejected(
+        "group_missing",
+        &table("boundary", "{ group = \"clamp\" }", v),
+        &[
+            "boundary[0].region.group",
+            "\"clamp\"",
+            "no physical curve or point of that name",
+            "bottom",
+        ],
+    );
+    expect_rejected(
+        "group_and_box",
+        &table(
+            "boundary",
+            "{ group = \"left\", min = [0.0, 0.0], max = [1.0, 1.0] }",
+            v,
+        ),
+        &["boundary[0].region", "either `group` or `min` and `max`"],
+    );
+    expect_rejected(
+        "region_empty",
+        &table("boundary", "{}", v),
+        &[
+            "boundary[0].region",
+            "give `min = [x, y]` and `max = [x, y]`",
+        ],
+    );
+    expect_rejected(
+        "pressure_on_a_point",
+        &table("pressure", "{ group = \"corner\" }", "value = 1.0e6"),
+        &[
+            "pressure[0].region.group",
+            "is a physical point; a pressure needs a physical curve",
+        ],
+    );
+    expect_rejected(
+        "group_on_a_generated_body",
+        &format!(
+            "{}\n[[boundary]]\nbody = \"block\"\nregion = {{ group = \"left\" }}\n{v}\n",
+            valid()
+        ),
+        &["boundary[0].region.group", "is not read from a Gmsh file"],
+    );
+}

@@ -198,3 +198,60 @@ fn the_notched_plate_asset_runs_on_the_cpu_reference() {
     assert!(summary.contains("\"completed\""), "{summary}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The square of `tests/data/gmsh/square.msh` with `tables` appended.
+fn square_scene(tables: &str) -> String {
+    format!(
+        "[run]\nend_time = 1.0e-5\n[[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\n\
+         density = 7850.0\nyoungs_modulus = 2.1e11\npoisson_ratio = 0.3\n\
+         [[body]]\nname = \"square\"\nmaterial = \"steel\"\n\
+         mesh = {{ gmsh = {:?}, group = \"square\" }}\n{tables}",
+        test_mesh("square.msh").to_string_lossy()
+    )
+}
+
+fn square_model(tables: &str) -> ricochet::model::Model {
+    let scene = ricochet::scene::Scene::parse(&square_scene(tables), Path::new("square.toml"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    ricochet::run::model(&scene).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn regions_by_group_select_what_the_boxes_around_the_curves_select() {
+    // Velocity boundaries: the physical curves "bottom" and "left" and the point "corner"
+    // against boxes around the same edges.
+    let by_name = square_model(
+        "[[boundary]]\nbody = \"square\"\nregion = { group = \"bottom\" }\nvelocity = { y = 0.0 }\n\
+         [[boundary]]\nbody = \"square\"\nregion = { group = \"left\" }\nvelocity = { x = 1.0 }\n\
+         [[boundary]]\nbody = \"square\"\nregion = { group = \"corner\" }\nvelocity = { x = 0.0 }\n",
+    );
+    let by_box = square_model(
+        "[[boundary]]\nbody = \"square\"\nregion = { min = [-0.01, -0.01], max = [1.01, 0.01] }\nvelocity = { y = 0.0 }\n\
+         [[boundary]]\nbody = \"square\"\nregion = { min = [-0.01, -0.01], max = [0.01, 1.01] }\nvelocity = { x = 1.0 }\n\
+         [[boundary]]\nbody = \"square\"\nregion = { min = [-0.01, -0.01], max = [0.01, 0.01] }\nvelocity = { x = 0.0 }\n",
+    );
+    let key = |m: &ricochet::model::Model| {
+        m.constraints
+            .iter()
+            .map(|c| (c.node, c.vx, c.vy))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(key(&by_name), key(&by_box));
+    // 9 nodes on each edge of this mesh, the corner shared.
+    assert_eq!(by_name.constraints.len(), 17);
+    // Pressure on the curve "top" against a box around the top edge: the same nodal loads.
+    let p_name = square_model(
+        "[[pressure]]\nbody = \"square\"\nregion = { group = \"top\" }\nvalue = 1.0e6\n",
+    );
+    let p_box = square_model(
+        "[[pressure]]\nbody = \"square\"\nregion = { min = [-0.01, 0.99], max = [1.01, 1.01] }\nvalue = 1.0e6\n",
+    );
+    assert_eq!(p_name.pressures[0].edges, 8);
+    assert_eq!(p_name.pressures[0].nodes, p_box.pressures[0].nodes);
+    // The loads add up to p times the edge length (1 m) times the thickness (1 m), downward.
+    let total: f64 = p_name.pressures[0].nodes.iter().map(|(_, f)| f[1]).sum();
+    assert!(
+        (total + 1.0).abs() < 1e-12,
+        "total load per unit pressure {total}"
+    );
+}
