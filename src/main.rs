@@ -208,6 +208,13 @@ const EXIT_FAILED_RUN: u8 = 3;
 const EXIT_VERIFY_FAILED: u8 = 4;
 
 fn main() -> ExitCode {
+    // Output piped into a reader that stops early (`ricochet check scene.toml | head`): end
+    // quietly on SIGPIPE, as command-line tools do, instead of panicking on the failed print.
+    #[cfg(unix)]
+    // SAFETY: restoring the default action of one signal before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     match dispatch(cli) {
         Ok(code) => code,
