@@ -1,6 +1,8 @@
 // Velocity boundary conditions, one thread per constrained node, after the node stage: sets the
-// prescribed components, corrects u_{n+1}, and accumulates the work of the reaction
-// m (v_prescribed - v_free) v_prescribed. Mirrors the VelocityBoundaries stage of CpuSolver.
+// prescribed components (a constant, or load curve k of `curves` at t_{n+1/2}), corrects u_{n+1},
+// and accumulates the work of the reaction j = m (v^{n+1/2} - v_free), j (v^{n-1/2} + v^{n+1/2}) / 2
+// with v^{n-1/2} the prescribed value at t_{n-1/2} (2 v_0 - v^{1/2} on the first step). Mirrors
+// the VelocityBoundaries stage of CpuSolver.
 
 struct Constraint {
     node: u32,
@@ -8,9 +10,9 @@ struct Constraint {
     vx: f32,
     vy: f32,
     mass: f32,
+    curve_x: u32,         // load curve of vx (NONE: the constant vx)
+    curve_y: u32,
     _p0: f32,
-    _p1: f32,
-    _p2: f32,
 }
 
 override WG: u32 = 64u;
@@ -21,6 +23,14 @@ override WG: u32 = 64u;
 @group(0) @binding(3) var<storage, read_write> v_prev: array<vec2<f32>>;
 @group(0) @binding(4) var<storage, read_write> sample_src: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> ctrl: Control;
+@group(0) @binding(6) var<storage, read> curves: array<vec2<f32>>;
+
+fn prescribed(v: f32, curve: u32, t: f32) -> f32 {
+    if (curve == NONE) {
+        return v;
+    }
+    return curve_at(curve, t);
+}
 
 @compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -37,24 +47,40 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let move_u = (flags & FLAG_END) == 0u;
     let dt = ctrl.dt_next;
     var work = 0.0;
+    var after = 0.0;
     var vp = v_prev[c.node];
     // The reaction acts on the masses of the update ((1 + c) m with mass damping).
     let mr = c.mass * (1.0 + ctrl.damp_c);
+    let t = time_now();
+    let t_new = t + 0.5 * dt;
+    let t_old = t - 0.5 * ctrl.dt_prev;
+    let first = ctrl.step == 0u;
+    // On the first step the update is a half step: the reaction's share in
+    // M (v^{1/2} - v^{-1/2}) = dt f_0 + 2 j is 2 j (as on the CPU).
+    let jw = select(1.0, 2.0, first) * mr;
     if ((c.mask & 1u) != 0u) {
-        work += mr * (c.vx - s.z) * c.vx;
+        let vn = prescribed(c.vx, c.curve_x, t_new);
+        let vo = select(prescribed(c.vx, c.curve_x, t_old), 2.0 * prescribed(c.vx, c.curve_x, t) - vn, first);
+        let j = jw * (vn - s.z);
+        work += 0.5 * j * (vo + vn);
+        after += j * vn;
         if (move_u) {
-            s.x += dt * (c.vx - s.z);
+            s.x += dt * (vn - s.z);
         }
-        s.z = c.vx;
-        vp.x = c.vx;
+        s.z = vn;
+        vp.x = vo;
     }
     if ((c.mask & 2u) != 0u) {
-        work += mr * (c.vy - s.w) * c.vy;
+        let vn = prescribed(c.vy, c.curve_y, t_new);
+        let vo = select(prescribed(c.vy, c.curve_y, t_old), 2.0 * prescribed(c.vy, c.curve_y, t) - vn, first);
+        let j = jw * (vn - s.w);
+        work += 0.5 * j * (vo + vn);
+        after += j * vn;
         if (move_u) {
-            s.y += dt * (c.vy - s.w);
+            s.y += dt * (vn - s.w);
         }
-        s.w = c.vy;
-        vp.y = c.vy;
+        s.w = vn;
+        vp.y = vo;
     }
     nodes[c.node] = s;
     if ((flags & (FLAG_SAMPLE | FLAG_SNAPSHOT)) != 0u) {
@@ -63,7 +89,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             sample_src[c.node] = vec4<f32>(0.5 * c.mass * dot(vp, s.zw), 0.5 * c.mass * (vp + s.zw), 0.0);
         }
     }
-    // (accumulated reaction work, this step's share); control.wgsl takes x - y / 2.
+    // (accumulated reaction work, twice this step's share after t_n); control.wgsl takes x - y / 2.
     let slot = params.n_nodes + params.n_elems + k;
-    sample_src[slot] = vec4<f32>(sample_src[slot].x + work, work, 0.0, 0.0);
+    sample_src[slot] = vec4<f32>(sample_src[slot].x + work, after, 0.0, 0.0);
 }

@@ -12,7 +12,7 @@
 struct Entry {
     f: vec2<f32>,         // N/Pa
     value: f32,           // Pa
-    ramp: f32,            // s (0: none)
+    ramp: f32,            // s (0: none; -1 - k: the pressure is load curve k of `curves`)
 }
 
 override WG: u32 = 64u;
@@ -27,11 +27,8 @@ override WG: u32 = 64u;
 @group(0) @binding(7) var<storage, read> adj_slots: array<u32>;
 @group(0) @binding(8) var<storage, read> v_old: array<vec2<f32>>;
 @group(0) @binding(9) var<storage, read_write> sample_src: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read> curves: array<vec2<f32>>;
 
-// t_n in seconds (from the 64-bit tick count).
-fn time_now() -> f32 {
-    return (f32(ctrl.t_hi) * 4294967296.0 + f32(ctrl.t_lo)) / params.ticks_per_second;
-}
 
 @compute @workgroup_size(WG)
 fn pressure_force(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -46,6 +43,8 @@ fn pressure_force(@builtin(global_invocation_id) gid: vec3<u32>) {
     var p = e.value;
     if (e.ramp > 0.0) {
         p *= clamp(time_now() / e.ramp, 0.0, 1.0);
+    } else if (e.ramp < 0.0) {
+        p = curve_at(u32(-e.ramp) - 1u, time_now());
     }
     elem_force[4u * params.n_elems + k] = p * e.f;
 }

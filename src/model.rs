@@ -34,8 +34,23 @@ pub struct NodeConstraint {
     pub node: u32,
     /// Prescribed x velocity, if any.
     pub vx: Option<f64>,
-    /// Prescribed y velocity, if any.
+    /// Prescribed y velocity, if any (with `cy`, its value at t = 0).
     pub vy: Option<f64>,
+    /// Index into [`Model::curves`] of the x velocity's load curve (`None`: constant `vx`).
+    pub cx: Option<u32>,
+    /// Index into [`Model::curves`] of the y velocity's load curve (`None`: constant `vy`).
+    pub cy: Option<u32>,
+}
+
+impl NodeConstraint {
+    /// The prescribed (x, y) velocity at time `t` of `curves` (the model's).
+    pub fn velocity_at(&self, curves: &[crate::scene::LoadCurve], t: f64) -> [Option<f64>; 2] {
+        let at = |v: Option<f64>, c: Option<u32>| match c {
+            Some(k) => Some(curves[k as usize].at(t)),
+            None => v,
+        };
+        [at(self.vx, self.cx), at(self.vy, self.cy)]
+    }
 }
 
 /// A pressure load resolved to nodal forces.
@@ -49,6 +64,8 @@ pub struct PressureLoad {
     pub value: f64,
     /// Duration of the linear ramp (s), if any.
     pub ramp: Option<f64>,
+    /// The load curve, when the pressure is one (`value` is then its value at t = 0).
+    pub curve: Option<crate::scene::LoadCurve>,
     /// Loaded nodes (global indices, ascending) and their force per unit pressure (N/Pa).
     pub nodes: Vec<(u32, [f64; 2])>,
     /// Number of loaded edges.
@@ -56,8 +73,12 @@ pub struct PressureLoad {
 }
 
 impl PressureLoad {
-    /// The pressure at time `t`: `value`, scaled by `min(t / ramp, 1)` with a ramp.
+    /// The pressure at time `t`: its load curve's value, or `value`, scaled by `min(t / ramp, 1)`
+    /// with a ramp.
     pub fn at(&self, t: f64) -> f64 {
+        if let Some(c) = &self.curve {
+            return c.at(t);
+        }
         match self.ramp {
             Some(r) => self.value * (t / r).clamp(0.0, 1.0),
             None => self.value,
@@ -89,6 +110,8 @@ pub struct Model {
     pub bodies: Vec<BodyModel>,
     /// Velocity constraints, sorted by node.
     pub constraints: Vec<NodeConstraint>,
+    /// The load curves of the velocity boundaries ([`NodeConstraint::cx`], `cy`).
+    pub curves: Vec<crate::scene::LoadCurve>,
     /// Contacts between bodies (as in the scene).
     pub contacts: Vec<scene::Contact>,
     /// Rigid walls (as in the scene).
@@ -119,6 +142,7 @@ impl Model {
             element_body: Vec::new(),
             bodies: Vec::new(),
             constraints: Vec::new(),
+            curves: Vec::new(),
             contacts: scene.contacts.clone(),
             walls: scene.walls.clone(),
             initial_overlaps: Vec::new(),
@@ -255,6 +279,13 @@ impl Model {
         let mut cons: Vec<Option<NodeConstraint>> = vec![None; m.position.len()];
         for b in &scene.boundaries {
             let range = m.bodies[b.body].nodes.clone();
+            let mut curve = |c: &Option<crate::scene::LoadCurve>| {
+                c.as_ref().map(|c| {
+                    m.curves.push(c.clone());
+                    (m.curves.len() - 1) as u32
+                })
+            };
+            let (cx, cy) = (curve(&b.curve_x), curve(&b.curve_y));
             let named: Option<std::collections::HashSet<usize>> = b
                 .group
                 .as_ref()
@@ -274,12 +305,16 @@ impl Model {
                         node: n as u32,
                         vx: None,
                         vy: None,
+                        cx: None,
+                        cy: None,
                     });
                     if b.vx.is_some() {
                         c.vx = b.vx;
+                        c.cx = cx;
                     }
                     if b.vy.is_some() {
                         c.vy = b.vy;
+                        c.cy = cy;
                     }
                 }
             }
@@ -306,13 +341,15 @@ impl Model {
             });
             for n in nodes {
                 if m.position[n][0].abs() <= 1e-12 * size {
-                    cons[n]
-                        .get_or_insert(NodeConstraint {
-                            node: n as u32,
-                            vx: None,
-                            vy: None,
-                        })
-                        .vx = Some(0.0);
+                    let c = cons[n].get_or_insert(NodeConstraint {
+                        node: n as u32,
+                        vx: None,
+                        vy: None,
+                        cx: None,
+                        cy: None,
+                    });
+                    c.vx = Some(0.0);
+                    c.cx = None;
                 }
             }
         }
@@ -417,6 +454,7 @@ impl Model {
         PressureLoad {
             value: p.value,
             ramp: p.ramp,
+            curve: p.curve.clone(),
             nodes: force.into_iter().collect(),
             edges,
         }

@@ -6,6 +6,7 @@
 //! - [`gmsh`]: the shipped Gmsh MSH 4.1 meshes (counts, ASCII against binary, orientation);
 //! - [`rigid`]: rigid translation and (large) rotation of neo-Hookean elements, spinning disk;
 //! - [`hourglass`]: hourglass modes, their control (stiffness, viscous) and reported energy;
+//! - [`load_curve`]: velocities and pressures as tables of (time, value), the pulled bar's closed form;
 //! - [`mass`]: lumped mass and momentum conservation;
 //! - [`wave`]: 1D waves in a rod strip against the dispersion table of `REFERENCES.md` section 2;
 //! - [`energy`]: the energy audit of a free-vibrating block (conservative and dissipative), of a
@@ -55,6 +56,8 @@ mod general_contact;
 mod gmsh;
 #[path = "core/hourglass.rs"]
 mod hourglass;
+#[path = "core/load_curve.rs"]
+mod load_curve;
 #[path = "core/mass.rs"]
 mod mass;
 #[path = "core/outputs.rs"]

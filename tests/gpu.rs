@@ -397,6 +397,36 @@ fn parity_with_the_multi_level_reductions() {
     );
 }
 
+#[path = "shared/load_curve_scene.rs"]
+mod load_curve_scene;
+
+/// Load curves on the device: the pulled bar (a ramped-then-held velocity) and the same bar under
+/// a pressure curve, as on the CPU.
+#[test]
+fn load_curves_as_on_the_cpu() {
+    use load_curve_scene::*;
+    let pulled = bar_scene(&format!("[[0.0, 0.0], [{RAMP:e}, {V}]]"));
+    parity_with("pulled_bar_curve", &pulled, None);
+    let pressed = bar_scene("0.0").replace(
+        &format!(
+            "region = {{ min = [{}, -1.0], max = [{}, 1.0] }}\nvelocity = {{ x = 0.0 }}\n",
+            L - 1e-9,
+            L + 1e-9
+        ),
+        &format!(
+            "region = {{ min = [{}, -1.0], max = [{}, 1.0] }}\nvelocity = {{ y = 0.0 }}\n\n\
+             [[pressure]]\nbody = \"bar\"\nregion = {{ min = [{}, -1.0], max = [{}, 1.0] }}\n\
+             value = [[0.0, 0.0], [{RAMP:e}, -1.0e6], [1.0e-4, -2.0e6]]\n",
+            L - 1e-9,
+            L + 1e-9,
+            L - 1e-9,
+            L + 1e-9
+        ),
+    );
+    assert!(pressed.contains("[[pressure]]"), "{pressed}");
+    parity_with("pressure_curve", &pressed, None);
+}
+
 /// 300 one-element bodies, each moving at its own velocity: more sum instances than a reduction
 /// workgroup has lanes, so that the second level of the sums (`sum_instances`) and the
 /// history's body columns (spread over the control workgroup's lanes) are exercised, fused and

@@ -124,7 +124,9 @@ pub struct GpuConstraint {
     pub vx: f32,
     pub vy: f32,
     pub mass: f32,
-    pub _pad: [f32; 3],
+    pub curve_x: u32,
+    pub curve_y: u32,
+    pub _pad: f32,
 }
 
 /// Control flags (WGSL `FLAG_*`).

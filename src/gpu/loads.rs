@@ -10,7 +10,10 @@ use super::kernels::{compute_pipeline, Features};
 use crate::model::Model;
 
 /// WGSL source.
-pub const SOURCE: &str = include_str!("../../shaders/loads.wgsl");
+pub const SOURCE: &str = concat!(
+    include_str!("../../shaders/curve.wgsl"),
+    include_str!("../../shaders/loads.wgsl")
+);
 
 /// Threads per workgroup.
 pub const WORKGROUP: u32 = 64;
@@ -23,7 +26,8 @@ pub struct GpuPressureEntry {
     pub f: [f32; 2],
     /// The load's pressure (Pa).
     pub value: f32,
-    /// The load's ramp duration (s; 0 without a ramp).
+    /// The load's ramp duration (s; 0 without a ramp; -1 - k for load curve k of the curve
+    /// table, [`super::boundary::curve_table`]).
     pub ramp: f32,
 }
 
@@ -57,17 +61,24 @@ pub(crate) fn work_pipeline(device: &wgpu::Device, features: Features) -> wgpu::
 /// The pressure entries in the CPU's order (loads in scene order, each load's nodes ascending),
 /// with the node of each.
 pub fn pressure_entries(model: &Model) -> Vec<(u32, GpuPressureEntry)> {
+    let (_, curves) = super::boundary::curve_table(model);
     model
         .pressures
         .iter()
-        .flat_map(|p| {
+        .zip(curves)
+        .flat_map(|(p, curve)| {
+            // A load curve k is encoded as the ramp -1 - k (see loads.wgsl's Entry).
+            let ramp = match curve {
+                Some(k) => -1.0 - k as f32,
+                None => p.ramp.unwrap_or(0.0) as f32,
+            };
             p.nodes.iter().map(move |&(n, f)| {
                 (
                     n,
                     GpuPressureEntry {
                         f: [f[0] as f32, f[1] as f32],
                         value: p.value as f32,
-                        ramp: p.ramp.unwrap_or(0.0) as f32,
+                        ramp,
                     },
                 )
             })

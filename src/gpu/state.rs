@@ -442,9 +442,20 @@ impl GpuState {
                 vx: c.vx.unwrap_or(0.0) as f32,
                 vy: c.vy.unwrap_or(0.0) as f32,
                 mass: model.mass[c.node as usize] as f32,
-                _pad: [0.0; 3],
+                curve_x: c.cx.unwrap_or(u32::MAX),
+                curve_y: c.cy.unwrap_or(u32::MAX),
+                _pad: 0.0,
             })
             .collect();
+        // Load curves: only for scenes with velocity boundaries or pressure loads (their kernels
+        // declare the table), at least one entry.
+        let curves_buf = (nc > 0 || np > 0).then(|| {
+            a.init(
+                "load_curves",
+                bytemuck::cast_slice(&boundary::curve_table(model).0),
+                storage,
+            )
+        });
         let cons_buf =
             (nc > 0).then(|| a.init("constraints", bytemuck::cast_slice(&cons), storage));
         let sample_src = a.zeroed(
@@ -563,8 +574,8 @@ impl GpuState {
                 ],
             ),
             node: bind(device, "node", &kernels.node, &nd),
-            boundary: match (&kernels.boundary, &cons_buf) {
-                (Some(p), Some(c)) => Some(bind(
+            boundary: match (&kernels.boundary, &cons_buf, &curves_buf) {
+                (Some(p), Some(c), Some(cv)) => Some(bind(
                     device,
                     "boundary",
                     p,
@@ -575,16 +586,23 @@ impl GpuState {
                         (3, &v_prev),
                         (4, &sample_src),
                         (5, &ctrl),
+                        (6, cv),
                     ],
                 )),
                 _ => None,
             },
-            pressure: match (&kernels.pressure, &press_buf) {
-                (Some(p), Some(e)) => Some(bind(
+            pressure: match (&kernels.pressure, &press_buf, &curves_buf) {
+                (Some(p), Some(e), Some(cv)) => Some(bind(
                     device,
                     "pressure_force",
                     p,
-                    &[(0, &params_buf), (1, &ctrl), (2, e), (3, &elem_force)],
+                    &[
+                        (0, &params_buf),
+                        (1, &ctrl),
+                        (2, e),
+                        (3, &elem_force),
+                        (10, cv),
+                    ],
                 )),
                 _ => None,
             },

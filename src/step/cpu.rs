@@ -485,17 +485,34 @@ impl CpuSolver {
             );
             return self.fail(events, msg);
         }
-        // Work of the reactions: with impulse j_n = m (val - v_free) and v^{n-1/2} = v^{n+1/2} = val,
-        // the conserved energy E_n gains val (j_0 + ... + j_{n-1} + j_n / 2): the impulse of step n
-        // is shared with the interval that follows (see `Sample::external`).
+        // Work of the reactions: the impulse j_n = m (v^{n+1/2} - v_free) does the work
+        // j_n (v^{n-1/2} + v^{n+1/2}) / 2, half of it after t_n (shared with the interval that
+        // follows, see `Sample::external`). v^{n+1/2} is the prescribed value at t_{n+1/2} (a
+        // load curve's, or the constant), v^{n-1/2} the one at t_{n-1/2} (on the first step
+        // 2 v_0 - v^{1/2}, as for every node): for a constant, val (j_0 + ... + j_n / 2).
         let mut step_work = 0.0;
+        let mut reaction_after = 0.0;
         if self.plan.has(Stage::VelocityBoundaries) {
+            let t_new = self.s.t + 0.5 * dt_next;
+            let t_old = self.s.t - 0.5 * self.s.dt_prev;
             for c in &self.model.constraints {
                 let i = c.node as usize;
                 let m = mass_scale * self.model.mass[i];
-                for (k, val) in [(0, c.vx), (1, c.vy)] {
-                    if let Some(val) = val {
-                        step_work += m * (val - self.s.v[i][k]) * val;
+                let new = c.velocity_at(&self.model.curves, t_new);
+                let old = if self.s.n == 0 {
+                    let v0 = c.velocity_at(&self.model.curves, self.s.t);
+                    [0, 1].map(|k| Some(2.0 * v0[k]? - new[k]?))
+                } else {
+                    c.velocity_at(&self.model.curves, t_old)
+                };
+                // On the first step the update is a half step (v^{1/2} = v_0 + dt/2 a_0 + j / m),
+                // so that M (v^{1/2} - v^{-1/2}) = dt f_0 + 2 j: the reaction's share is 2 j.
+                let twice = if self.s.n == 0 { 2.0 } else { 1.0 };
+                for k in 0..2 {
+                    if let (Some(val), Some(before)) = (new[k], old[k]) {
+                        let j = twice * m * (val - self.s.v[i][k]);
+                        step_work += 0.5 * j * (before + val);
+                        reaction_after += 0.5 * j * val;
                         self.s.v[i][k] = val;
                     }
                 }
@@ -609,7 +626,7 @@ impl CpuSolver {
                 hourglass: st.hourglass_stored + self.s.hourglass_work,
                 viscous: self.s.bulk_work - (self.s.damping_work - self.s.damping_after),
                 plastic: self.s.plastic_work,
-                external: self.s.external_work - 0.5 * step_work
+                external: self.s.external_work - reaction_after
                     + (self.s.pressure_work - self.s.pressure_after),
                 contact: -(self.s.contact_work - self.s.contact_after),
                 contacts: self

@@ -1342,3 +1342,48 @@ fn bad_regions_by_group_name_the_key_and_the_group() {
         &["boundary[0].region.group", "is not read from a Gmsh file"],
     );
 }
+
+#[test]
+fn bad_load_curves_name_the_key_and_the_point() {
+    let boundary = |v: &str| {
+        format!(
+            "{}\n[[boundary]]\nbody = \"block\"\nregion = {{ min = [-0.01, -0.01], max = [0.01, 0.06] }}\nvelocity = {{ x = {v} }}\n",
+            valid()
+        )
+    };
+    expect_rejected(
+        "curve_decreasing",
+        &boundary("[[0.0, 0.0], [1.0e-4, 1.0], [5.0e-5, 2.0]]"),
+        &["boundary[0].velocity.x[2]", "times must increase"],
+    );
+    expect_rejected(
+        "curve_negative_time",
+        &boundary("[[-1.0e-4, 0.0], [1.0e-4, 1.0]]"),
+        &["boundary[0].velocity.x[0]", "the time at least 0"],
+    );
+    expect_rejected(
+        "curve_three_numbers",
+        &boundary("[[0.0, 0.0, 1.0]]"),
+        &["boundary[0].velocity.x[0]", "each point is [time, value]"],
+    );
+    expect_rejected(
+        "curve_empty",
+        &boundary("[]"),
+        &["boundary[0].velocity.x", "needs 1 to 100000"],
+    );
+    expect_rejected(
+        "curve_not_finite",
+        &boundary("[[0.0, 0.0], [1.0e-4, nan]]"),
+        &["boundary[0].velocity.x"],
+    );
+    let pressure = format!(
+        "{}\n[[pressure]]\nbody = \"block\"\nregion = {{ min = [-0.01, 0.049], max = [0.11, 0.051] }}\nvalue = [[0.0, 0.0], [1.0e-5, 1.0e6]]\nramp = 1.0e-5\n",
+        valid()
+    );
+    expect_rejected(
+        "curve_with_ramp",
+        &pressure,
+        &["pressure[0].ramp", "a load curve"],
+    );
+    expect_accepted("curve_ok", &boundary("[[0.0, 0.0], [1.0e-6, 1.0]]"), true);
+}

@@ -339,6 +339,31 @@ fn elastic_disk_on_a_rigid_wall_matches_the_contact_time_peak_force_and_restitut
     }
 }
 
+#[test]
+fn gmsh_disk_on_a_rigid_wall_passes_the_generated_disks_bounds() {
+    // REFERENCES.md section 5 at 1 m/s, the disk meshed by Gmsh (assets/gmsh/disk.msh): the same
+    // bounds as the generated, graded disk above.
+    let (v0, time, force, restitution) = DISK_CASES[0];
+    let (r, model) = run_text(&disk_gmsh_text(v0), "disk_wall_gmsh");
+    let rows: Vec<Sample> = r.samples.iter().map(|s| s.0.clone()).collect();
+    let (duration, peak, e, drift) = disk_metrics(&rows, model.bodies[0].mass, v0);
+    eprintln!(
+        "Gmsh disk on wall at {v0} m/s: contact {:.2} us ({:+.2} %), peak {:.3} MN/m ({:+.2} %), \
+         restitution {e:.4} (reference {restitution}), energy drift {drift:.2e}",
+        duration * 1e6,
+        100.0 * (duration / time - 1.0),
+        peak * 1e-6,
+        100.0 * (peak / force - 1.0)
+    );
+    assert!(
+        (duration / time - 1.0).abs() < 0.03,
+        "contact time {duration}"
+    );
+    assert!((peak / force - 1.0).abs() < 0.05, "peak force {peak}");
+    assert!((e - restitution).abs() < 0.01, "restitution {e}");
+    assert!(drift < 5e-3, "energy drift {drift}");
+}
+
 /// Two stacked blocks whose meshes overlap by `overlap` (non-matching: 4 and 3 cells along x)
 /// and a wall the lower block's bottom starts `overlap` behind, at rest.
 pub(crate) fn overlapping_blocks(overlap: f64, method: &str) -> String {

@@ -245,6 +245,33 @@ fn gpu_elastic_disk_on_a_rigid_wall_matches_the_references_and_the_cpu() {
 }
 
 #[test]
+fn gpu_gmsh_disk_on_a_rigid_wall_passes_the_generated_disks_bounds() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let (v0, time, force, restitution) = DISK_CASES[0];
+    let (r, model) = run_on(Some(ctx.clone()), &disk_gmsh_text(v0), "disk_gmsh");
+    let (rc, _) = run_on(None, &disk_gmsh_text(v0), "disk_gmsh");
+    let mass = model.bodies[0].mass;
+    let (duration, peak, e, drift) = disk_metrics(&rows(&r), mass, v0);
+    let (_, pc, ec, _) = disk_metrics(&rows(&rc), mass, v0);
+    eprintln!(
+        "gpu Gmsh disk on wall at {v0} m/s: contact {:.2} us ({:+.2} %), peak {:.3} MN/m \
+         ({:+.2} %; CPU {:.3}), restitution {e:.4} (CPU {ec:.4}, reference {restitution}), \
+         energy drift {drift:.2e}",
+        duration * 1e6,
+        100.0 * (duration / time - 1.0),
+        peak * 1e-6,
+        100.0 * (peak / force - 1.0),
+        pc * 1e-6,
+    );
+    assert!((duration / time - 1.0).abs() < 0.03);
+    assert!((peak / force - 1.0).abs() < 0.05);
+    assert!((e - restitution).abs() < 0.01);
+    assert!(drift < 5e-3);
+    assert!((peak / pc - 1.0).abs() < 1e-3 && (e - ec).abs() < 1e-4);
+}
+
+#[test]
 fn gpu_contact_runs_are_bit_identical_run_to_run() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());

@@ -76,6 +76,9 @@ fn expected_buffers(plan: &Plan) -> BTreeSet<&'static str> {
     if plan.has(Pressure) {
         b.insert("pressure_entries");
     }
+    if plan.has(VelocityBoundaries) || plan.has(Pressure) {
+        b.insert("load_curves");
+    }
     if plan.has(Pressure) || plan.has(MassDamping) {
         b.insert("v_old");
     }

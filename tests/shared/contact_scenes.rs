@@ -186,6 +186,27 @@ pub fn disk_text(v0: f64) -> String {
     )
 }
 
+/// The disk on the wall of [`disk_text`] meshed by Gmsh (`assets/disk_wall_gmsh.toml`, its mesh
+/// file given by absolute path so that the text parses from anywhere).
+pub fn disk_gmsh_text(v0: f64) -> String {
+    std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/disk_wall_gmsh.toml"
+    ))
+    .expect("read assets/disk_wall_gmsh.toml")
+    .replace(
+        "initial_velocity = [1.0, 0.0]",
+        &format!("initial_velocity = [{v0:e}, 0.0]"),
+    )
+    .replace(
+        "gmsh = \"gmsh/disk.msh\"",
+        &format!(
+            "gmsh = {:?}",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/assets/gmsh/disk.msh")
+        ),
+    )
+}
+
 /// Contact time, peak force (N/m), centre-of-mass restitution and the largest total-energy drift
 /// relative to E0 = M v0^2 / 2 of a disk-on-wall run's samples.
 pub fn disk_metrics(samples: &[Sample], mass: f64, v0: f64) -> (f64, f64, f64, f64) {
