@@ -364,6 +364,32 @@ impl Model {
             }
         }
         m.load_pressures(scene)?;
+        // Contacts limited to named faces: each face must reach the body's boundary.
+        for (i, c) in scene.contacts.iter().enumerate() {
+            let Some(faces) = &c.surfaces else { continue };
+            for (k, ((name, edges), &b)) in faces.iter().zip(&c.bodies).enumerate() {
+                let start = m.bodies[b].nodes.start as u32;
+                let set: std::collections::HashSet<(u32, u32)> = edges
+                    .iter()
+                    .flat_map(|e| [(start + e[0], start + e[1]), (start + e[1], start + e[0])])
+                    .collect();
+                let on_boundary = Surface::of_body(&m, b)
+                    .segments
+                    .iter()
+                    .any(|seg| set.contains(&(seg.nodes[0], seg.nodes[1])));
+                if !on_boundary {
+                    return Err(scene::invalid(
+                        scene,
+                        format!("contact[{i}].surfaces[{k}]"),
+                        format!("{name:?}"),
+                        &format!(
+                            "none of the curve's edges is on the boundary of body {:?}",
+                            scene.bodies[b].name
+                        ),
+                    ));
+                }
+            }
+        }
         Ok(m)
     }
 

@@ -130,6 +130,7 @@ struct RawContact {
     two_pass: Option<bool>,
     self_contact: Option<bool>,
     penalty_scale: Option<f64>,
+    surfaces: Option<Vec<String>>,
 }
 
 /// `bodies` of a `[[contact]]`: the string "all" or a list of names.
@@ -569,6 +570,11 @@ pub struct Contact {
     pub two_pass: bool,
     /// Penalty scale `s` (penalty only).
     pub penalty_scale: f64,
+    /// A pair limited to named faces (`surfaces = ["a", "b"]`): per body, the name of the
+    /// physical curve of its Gmsh file and its line elements as pairs of body node indices;
+    /// only the boundary segments among them (and their nodes) take part. `None`: the whole
+    /// boundary of each body.
+    pub surfaces: Option<Vec<(String, Vec<[u32; 2]>)>>,
 }
 
 /// A fixed planar rigid wall.
@@ -1118,6 +1124,54 @@ impl Validator<'_> {
         if group {
             list.sort_unstable();
         }
+        let surfaces = match &c.surfaces {
+            None => None,
+            Some(names) => {
+                let sk = format!("{key}.surfaces");
+                if group || names.len() != 2 {
+                    return Err(self.invalid(
+                        sk,
+                        format!("{names:?}"),
+                        "name one physical curve per body of a contact pair (two bodies, in \
+                         the order of `bodies`)",
+                    ));
+                }
+                let mut out = Vec::new();
+                for (k, (name, &b)) in names.iter().zip(&list).enumerate() {
+                    let body = &bodies[b];
+                    let MeshSpec::Gmsh { file, mesh, .. } = &body.mesh else {
+                        return Err(self.invalid(
+                            format!("{sk}[{k}]"),
+                            format!("{name:?}"),
+                            &format!(
+                                "body {:?} is not read from a Gmsh file: a contact surface by \
+                                 name is a physical curve of the body's mesh file",
+                                body.name
+                            ),
+                        ));
+                    };
+                    let Some(g) = mesh.groups.iter().find(|g| g.name == *name && g.dim == 1) else {
+                        let known: Vec<&str> = mesh
+                            .groups
+                            .iter()
+                            .filter(|g| g.dim == 1)
+                            .map(|g| g.name.as_str())
+                            .collect();
+                        return Err(self.invalid(
+                            format!("{sk}[{k}]"),
+                            format!("{name:?}"),
+                            &format!(
+                                "{} has no physical curve of that name on body {:?} (there: {known:?})",
+                                file.display(),
+                                body.name
+                            ),
+                        ));
+                    };
+                    out.push((name.clone(), g.edges.clone()));
+                }
+                Some(out)
+            }
+        };
         Ok(Contact {
             name: c.name.clone().unwrap_or(default),
             bodies: list,
@@ -1126,6 +1180,7 @@ impl Validator<'_> {
             method,
             two_pass: group || c.two_pass.unwrap_or(true),
             penalty_scale,
+            surfaces,
         })
     }
 

@@ -45,9 +45,27 @@ impl Builder<'_> {
         self.local[g as usize]
     }
 
-    /// Adds body `b`'s surface nodes to `p` as slaves.
-    fn slaves(&mut self, p: &mut Pass, b: usize) {
-        let ss = self.surface(b);
+    /// Body `b`'s surface, or with `only` (global node pairs, either direction) the segments
+    /// among them and their nodes (a contact limited to named faces).
+    fn surface_of(&mut self, b: usize, only: Option<&[[u32; 2]]>) -> Surface {
+        let mut s = self.surface(b);
+        if let Some(edges) = only {
+            let set: std::collections::HashSet<(u32, u32)> = edges
+                .iter()
+                .flat_map(|e| [(e[0], e[1]), (e[1], e[0])])
+                .collect();
+            s.segments
+                .retain(|seg| set.contains(&(seg.nodes[0], seg.nodes[1])));
+            let mut nodes: Vec<u32> = s.segments.iter().flat_map(|seg| seg.nodes).collect();
+            nodes.sort_unstable();
+            nodes.dedup();
+            s.nodes = nodes;
+        }
+        s
+    }
+
+    /// Adds the nodes of `ss` (body `b`'s surface) to `p` as slaves.
+    fn slaves(&mut self, p: &mut Pass, b: usize, ss: &Surface) {
         let mut prev = BTreeMap::new();
         let mut next = BTreeMap::new();
         for seg in &ss.segments {
@@ -65,10 +83,9 @@ impl Builder<'_> {
         }
     }
 
-    /// Adds body `b`'s surface segments to `p` as masters, with `share` of the contact's
+    /// Adds the segments of `ms` (body `b`'s surface) to `p` as masters, with `share` of the contact's
     /// penalty stiffness `scale` K t L^2 / A.
-    fn masters(&mut self, p: &mut Pass, b: usize, share: f64, scale: f64) {
-        let ms = self.surface(b);
+    fn masters(&mut self, p: &mut Pass, b: usize, ms: &Surface, share: f64, scale: f64) {
         let k_body = bulk_modulus(self.model, b);
         for s in &ms.segments {
             let l = surface::length(self.model, s);
@@ -104,25 +121,43 @@ impl Builder<'_> {
             // the stiffness (as a two-pass contact).
             let mut p = empty(true);
             for &b in &c.bodies {
-                self.slaves(&mut p, b);
+                let ss = self.surface(b);
+                self.slaves(&mut p, b, &ss);
             }
             for &b in &c.bodies {
-                self.masters(&mut p, b, 0.5, c.penalty_scale);
+                let ms = self.surface(b);
+                self.masters(&mut p, b, &ms, 0.5, c.penalty_scale);
             }
             passes.push(p);
             return;
         }
         let (first, second) = (c.bodies[0], c.bodies[1]);
-        let mut dirs = vec![(first, second, true)];
+        // Named faces: each body's curve edges in global node numbers.
+        let faces: Vec<Option<Vec<[u32; 2]>>> = (0..2)
+            .map(|k| {
+                c.surfaces.as_ref().map(|s| {
+                    let start = self.model.bodies[c.bodies[k]].nodes.start as u32;
+                    s[k].1
+                        .iter()
+                        .map(|e| [start + e[0], start + e[1]])
+                        .collect()
+                })
+            })
+            .collect();
+        let surf = [
+            self.surface_of(first, faces[0].as_deref()),
+            self.surface_of(second, faces[1].as_deref()),
+        ];
+        let mut dirs = vec![(first, second, 0, 1, true)];
         if c.two_pass {
-            dirs.push((second, first, false));
+            dirs.push((second, first, 1, 0, false));
         }
         // Two passes act on the same node pairs: each carries half the interface stiffness.
         let share = if c.two_pass { 0.5 } else { 1.0 };
-        for (slave, master, slave_is_first) in dirs {
+        for (slave, master, ks, km, slave_is_first) in dirs {
             let mut p = empty(slave_is_first);
-            self.masters(&mut p, master, share, c.penalty_scale);
-            self.slaves(&mut p, slave);
+            self.masters(&mut p, master, &surf[km], share, c.penalty_scale);
+            self.slaves(&mut p, slave, &surf[ks]);
             passes.push(p);
         }
     }

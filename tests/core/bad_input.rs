@@ -1387,3 +1387,53 @@ fn bad_load_curves_name_the_key_and_the_point() {
     );
     expect_accepted("curve_ok", &boundary("[[0.0, 0.0], [1.0e-6, 1.0]]"), true);
 }
+
+#[test]
+fn bad_contact_surfaces_name_the_key_and_the_curve() {
+    let plate =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/gmsh/notched_plate.msh");
+    let scene = |surfaces: &str| {
+        format!(
+            "{RUN}{MATERIAL}\n[[body]]\nname = \"plate\"\nmaterial = \"steel\"\n\
+             mesh = {{ gmsh = {p:?}, group = \"plate\" }}\n\
+             [[body]]\nname = \"striker\"\nmaterial = \"steel\"\n\
+             mesh = {{ gmsh = {p:?}, group = \"striker\" }}\n\
+             [[contact]]\nbodies = [\"striker\", \"plate\"]\nmethod = \"lagrange\"\nsurfaces = {surfaces}\n",
+            p = plate.to_string_lossy()
+        )
+    };
+    expect_rejected(
+        "surfaces_unknown",
+        &scene("[\"striker_face\", \"top\"]"),
+        &[
+            "contact[0].surfaces[1]",
+            "\"top\"",
+            "no physical curve of that name",
+            "plate_top",
+        ],
+    );
+    expect_rejected(
+        "surfaces_one",
+        &scene("[\"striker_face\"]"),
+        &["contact[0].surfaces", "one physical curve per body"],
+    );
+    expect_rejected(
+        "surfaces_wrong_body",
+        &scene("[\"plate_top\", \"striker_face\"]"),
+        &[
+            "contact[0].surfaces[0]",
+            "\"plate_top\"",
+            "on body \"striker\"",
+        ],
+    );
+    expect_rejected(
+        "surfaces_on_a_generated_body",
+        &format!(
+            "{}\n[[body]]\nname = \"other\"\nmaterial = \"steel\"\n\
+             mesh = {{ rectangle = {{ origin = [0.0, 0.1], size = [0.1, 0.05], cells = [4, 2] }} }}\n\
+             [[contact]]\nbodies = [\"block\", \"other\"]\nsurfaces = [\"a\", \"b\"]\n",
+            valid()
+        ),
+        &["contact[0].surfaces[0]", "is not read from a Gmsh file"],
+    );
+}

@@ -271,6 +271,48 @@ fn gpu_gmsh_disk_on_a_rigid_wall_passes_the_generated_disks_bounds() {
     assert!((peak / pc - 1.0).abs() < 1e-3 && (e - ec).abs() < 1e-4);
 }
 
+/// The Gmsh notched plate (bodies read from a mesh file, ends clamped by a named curve) with its
+/// contact limited to the named faces, on the device as on the CPU.
+#[test]
+fn gpu_notched_plate_with_named_faces_matches_the_cpu() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let root = env!("CARGO_MANIFEST_DIR");
+    let text = std::fs::read_to_string(format!("{root}/assets/notched_plate.toml"))
+        .expect("notched_plate.toml")
+        .replace("end_time = 4.0e-5", "end_time = 2.5e-5")
+        .replace(
+            "\"gmsh/notched_plate.msh\"",
+            &format!("{:?}", format!("{root}/assets/gmsh/notched_plate.msh")),
+        )
+        .replace(
+            "method = \"lagrange\"\ntwo_pass = true",
+            "method = \"lagrange\"\ntwo_pass = true\nsurfaces = [\"striker_face\", \"plate_top\"]",
+        );
+    assert!(text.contains("surfaces = "), "{text}");
+    let (r, model) = run_on(Some(ctx.clone()), &text, "notched_faces");
+    let (rc, _) = run_on(None, &text, "notched_faces");
+    let (g, c) = (rows(&r), rows(&rc));
+    let (vg, vc) = (
+        g.last().expect("rows").body_velocity[1],
+        c.last().expect("rows").body_velocity[1],
+    );
+    let peak = |s: &[Sample]| {
+        s.iter()
+            .map(|x| x.contacts[0].force[1].abs())
+            .fold(0.0f64, f64::max)
+    };
+    let (pg, pc) = (peak(&g), peak(&c));
+    eprintln!(
+        "gpu notched plate (named faces): striker {vg:?} (CPU {vc:?}) m/s, peak force {pg:.4e} \
+         (CPU {pc:.4e}) N/m, {} elements",
+        model.element_count()
+    );
+    assert!(vc[1] > 0.0, "the striker rebounds on the CPU: {vc:?}");
+    assert!((vg[1] / vc[1] - 1.0).abs() < 1e-3, "{vg:?} against {vc:?}");
+    assert!((pg / pc - 1.0).abs() < 1e-2, "peak force {pg} against {pc}");
+}
+
 #[test]
 fn gpu_contact_runs_are_bit_identical_run_to_run() {
     let Some(ctx) = context() else { return };
