@@ -300,6 +300,13 @@ pub fn overlapping_quads(nodes: &[[f64; 2]], quads: &[[u32; 4]]) -> Option<(usiz
         return None;
     }
     let key = |x: f64| (x / cell).floor() as i64;
+    // Cells a box spans, in f64: with coordinates far beyond the cell size (1e300 in a fuzzed
+    // mesh) the i64 keys saturate and their differences would overflow.
+    let large = |b: &[f64; 4]| {
+        let span = (((b[2] / cell).floor() - (b[0] / cell).floor()) + 1.0)
+            * (((b[3] / cell).floor() - (b[1] / cell).floor()) + 1.0);
+        span.is_nan() || span > 4096.0
+    };
     let mut grid: HashMap<(i64, i64), Vec<u32>> = HashMap::new();
     for (i, b) in boxes.iter().enumerate() {
         if !ok[i] {
@@ -307,10 +314,10 @@ pub fn overlapping_quads(nodes: &[[f64; 2]], quads: &[[u32; 4]]) -> Option<(usiz
         }
         // A quad far larger than the median spans at most 64 x 64 cells here; larger ones are
         // compared against the others directly below.
-        let (x0, y0, x1, y1) = (key(b[0]), key(b[1]), key(b[2]), key(b[3]));
-        if (x1 - x0 + 1) * (y1 - y0 + 1) > 4096 {
+        if large(b) {
             continue;
         }
+        let (x0, y0, x1, y1) = (key(b[0]), key(b[1]), key(b[2]), key(b[3]));
         for gx in x0..=x1 {
             for gy in y0..=y1 {
                 grid.entry((gx, gy)).or_default().push(i as u32);
@@ -348,7 +355,7 @@ pub fn overlapping_quads(nodes: &[[f64; 2]], quads: &[[u32; 4]]) -> Option<(usiz
     // The few very large quads, against every other.
     for i in 0..quads.len() {
         let b = &boxes[i];
-        if ok[i] && (key(b[2]) - key(b[0]) + 1) * (key(b[3]) - key(b[1]) + 1) > 4096 {
+        if ok[i] && large(b) {
             for j in 0..quads.len() {
                 if j != i && ok[j] && test(i, j) {
                     keep(i, j);

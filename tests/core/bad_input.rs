@@ -1437,3 +1437,24 @@ fn bad_contact_surfaces_name_the_key_and_the_curve() {
         &["contact[0].surfaces[0]", "is not read from a Gmsh file"],
     );
 }
+
+#[test]
+fn a_node_at_1e300_in_an_explicit_mesh_is_refused_at_once() {
+    // Found by the fuzz test (case 791 once assets were added): the overlap check's grid keys
+    // saturated and the cell count of the far quad overflowed, and `check` looped for minutes.
+    let base = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets/stress/corner_to_corner.toml"),
+    )
+    .expect("corner_to_corner.toml");
+    let node = "[7.0710678119e-03, 7.0710678119e-03]";
+    assert!(base.contains(node));
+    let text = base.replacen(node, "[7.0710678119e-03, -1e300]", 1);
+    let t0 = Instant::now();
+    expect_rejected("node_at_1e300", &text, &["body[0].mesh", "non-convex"]);
+    assert!(
+        t0.elapsed() < Duration::from_secs(20),
+        "took {:?}",
+        t0.elapsed()
+    );
+}
