@@ -925,10 +925,56 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             println!("  overlap  ... {} in all", overlaps.len());
         }
     }
+    for c in model.contacts.iter().filter(|c| c.surfaces.is_some()) {
+        if let Some(faces) = &c.surfaces {
+            let named: Vec<String> = faces
+                .iter()
+                .zip(&c.bodies)
+                .map(|((name, edges), &b)| {
+                    format!(
+                        "`{name}` of {} ({} edges)",
+                        model.bodies[b].name,
+                        edges.len()
+                    )
+                })
+                .collect();
+            println!("  faces    {}: {}", c.name, named.join(" against "));
+        }
+    }
+    for b in &scene.boundaries {
+        let curve = |c: &Option<ricochet::scene::LoadCurve>, axis: &str| {
+            c.as_ref().map(|c| {
+                let last = c.points.last().copied().unwrap_or([0.0; 2]);
+                format!(
+                    ", v{axis} a load curve of {} points ({:e} m/s from {:e} s)",
+                    c.points.len(),
+                    last[1],
+                    last[0]
+                )
+            })
+        };
+        let curves = [curve(&b.curve_x, "x"), curve(&b.curve_y, "y")]
+            .into_iter()
+            .flatten()
+            .collect::<String>();
+        let group = b
+            .group
+            .as_ref()
+            .map(|g| format!(" on group `{}` ({} nodes)", g.name, g.nodes.len()));
+        if group.is_some() || !curves.is_empty() {
+            println!("boundary   {}{}{curves}", b.key, group.unwrap_or_default());
+        }
+    }
     for (i, p) in model.pressures.iter().enumerate() {
-        let ramp = match p.ramp {
-            Some(r) => format!(", ramped over {r:e} s"),
-            None => String::new(),
+        let ramp = match (&p.curve, p.ramp) {
+            (Some(c), _) => format!(
+                ", a load curve of {} points ({:e} Pa from {:e} s)",
+                c.points.len(),
+                c.points.last().map_or(0.0, |q| q[1]),
+                c.points.last().map_or(0.0, |q| q[0])
+            ),
+            (None, Some(r)) => format!(", ramped over {r:e} s"),
+            (None, None) => String::new(),
         };
         println!(
             "pressure   pressure[{i}]: {:e} Pa on {} edges ({} nodes){ramp}",
