@@ -213,34 +213,49 @@ fn gpu_square_hitting_a_wall_corner_first_neither_turns_nor_drifts_sideways() {
     }
 }
 
+/// Runs the disk-on-a-wall scene `text` at `v0` on the device and on the CPU: the REFERENCES.md
+/// section 5 bounds on the device, and the two runs' peak force within 1e-3 and restitution
+/// within 1e-4 of each other.
+fn gpu_disk_on_wall(
+    ctx: &Arc<GpuContext>,
+    text: &str,
+    label: &str,
+    (v0, time, force, restitution): (f64, f64, f64, f64),
+) {
+    let (r, model) = run_on(Some(ctx.clone()), text, label);
+    let (rc, _) = run_on(None, text, label);
+    let mass = model.bodies[0].mass;
+    let (duration, peak, e, drift) = disk_metrics(&rows(&r), mass, v0);
+    let (dc, pc, ec, _) = disk_metrics(&rows(&rc), mass, v0);
+    let (dv, de) = agreement(&rows(&rc), &rows(&r), v0, 0.5 * mass * v0 * v0);
+    eprintln!(
+        "gpu {label} at {v0} m/s: contact {:.2} us ({:+.2} %; CPU {:.2}), peak {:.3} MN/m \
+         ({:+.2} %; CPU {:.3}), restitution {e:.4} (CPU {ec:.4}, reference {restitution}), \
+         energy drift {drift:.2e}, CPU-GPU velocity {dv:.1e} v0, energy {de:.1e} E0, searches {}",
+        duration * 1e6,
+        100.0 * (duration / time - 1.0),
+        dc * 1e6,
+        peak * 1e-6,
+        100.0 * (peak / force - 1.0),
+        pc * 1e-6,
+        r.summary.contact_searches
+    );
+    assert!((duration / time - 1.0).abs() < 0.03, "{label}");
+    assert!((peak / force - 1.0).abs() < 0.05, "{label}");
+    assert!((e - restitution).abs() < 0.01, "{label}");
+    assert!(drift < 5e-3, "{label}");
+    assert!(
+        (peak / pc - 1.0).abs() < 1e-3 && (e - ec).abs() < 1e-4,
+        "{label}"
+    );
+}
+
 #[test]
 fn gpu_elastic_disk_on_a_rigid_wall_matches_the_references_and_the_cpu() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    for (v0, time, force, restitution) in DISK_CASES {
-        let (r, model) = run_on(Some(ctx.clone()), &disk_text(v0), "disk");
-        let (rc, _) = run_on(None, &disk_text(v0), "disk");
-        let mass = model.bodies[0].mass;
-        let (duration, peak, e, drift) = disk_metrics(&rows(&r), mass, v0);
-        let (dc, pc, ec, _) = disk_metrics(&rows(&rc), mass, v0);
-        let (dv, de) = agreement(&rows(&rc), &rows(&r), v0, 0.5 * mass * v0 * v0);
-        eprintln!(
-            "gpu disk on wall at {v0} m/s: contact {:.2} us ({:+.2} %; CPU {:.2}), peak {:.3} MN/m \
-             ({:+.2} %; CPU {:.3}), restitution {e:.4} (CPU {ec:.4}, reference {restitution}), \
-             energy drift {drift:.2e}, CPU-GPU velocity {dv:.1e} v0, energy {de:.1e} E0, searches {}",
-            duration * 1e6,
-            100.0 * (duration / time - 1.0),
-            dc * 1e6,
-            peak * 1e-6,
-            100.0 * (peak / force - 1.0),
-            pc * 1e-6,
-            r.summary.contact_searches
-        );
-        assert!((duration / time - 1.0).abs() < 0.03);
-        assert!((peak / force - 1.0).abs() < 0.05);
-        assert!((e - restitution).abs() < 0.01);
-        assert!(drift < 5e-3);
-        assert!((peak / pc - 1.0).abs() < 1e-3 && (e - ec).abs() < 1e-4);
+    for case in DISK_CASES {
+        gpu_disk_on_wall(&ctx, &disk_text(case.0), "disk", case);
     }
 }
 
@@ -248,27 +263,8 @@ fn gpu_elastic_disk_on_a_rigid_wall_matches_the_references_and_the_cpu() {
 fn gpu_gmsh_disk_on_a_rigid_wall_passes_the_generated_disks_bounds() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let (v0, time, force, restitution) = DISK_CASES[0];
-    let (r, model) = run_on(Some(ctx.clone()), &disk_gmsh_text(v0), "disk_gmsh");
-    let (rc, _) = run_on(None, &disk_gmsh_text(v0), "disk_gmsh");
-    let mass = model.bodies[0].mass;
-    let (duration, peak, e, drift) = disk_metrics(&rows(&r), mass, v0);
-    let (_, pc, ec, _) = disk_metrics(&rows(&rc), mass, v0);
-    eprintln!(
-        "gpu Gmsh disk on wall at {v0} m/s: contact {:.2} us ({:+.2} %), peak {:.3} MN/m \
-         ({:+.2} %; CPU {:.3}), restitution {e:.4} (CPU {ec:.4}, reference {restitution}), \
-         energy drift {drift:.2e}",
-        duration * 1e6,
-        100.0 * (duration / time - 1.0),
-        peak * 1e-6,
-        100.0 * (peak / force - 1.0),
-        pc * 1e-6,
-    );
-    assert!((duration / time - 1.0).abs() < 0.03);
-    assert!((peak / force - 1.0).abs() < 0.05);
-    assert!((e - restitution).abs() < 0.01);
-    assert!(drift < 5e-3);
-    assert!((peak / pc - 1.0).abs() < 1e-3 && (e - ec).abs() < 1e-4);
+    let case = DISK_CASES[0];
+    gpu_disk_on_wall(&ctx, &disk_gmsh_text(case.0), "disk_gmsh", case);
 }
 
 /// The Gmsh notched plate (bodies read from a mesh file, ends clamped by a named curve) with its
