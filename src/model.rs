@@ -43,6 +43,17 @@ pub struct NodeConstraint {
 }
 
 impl NodeConstraint {
+    /// Node `node` with no component prescribed yet.
+    pub fn free(node: u32) -> Self {
+        Self {
+            node,
+            vx: None,
+            vy: None,
+            cx: None,
+            cy: None,
+        }
+    }
+
     /// The prescribed (x, y) velocity at time `t` of `curves` (the model's).
     pub fn velocity_at(&self, curves: &[crate::scene::LoadCurve], t: f64) -> [Option<f64>; 2] {
         let at = |v: Option<f64>, c: Option<u32>| match c {
@@ -301,13 +312,7 @@ impl Model {
                 };
                 if selected {
                     hit += 1;
-                    let c = cons[n].get_or_insert(NodeConstraint {
-                        node: n as u32,
-                        vx: None,
-                        vy: None,
-                        cx: None,
-                        cy: None,
-                    });
+                    let c = cons[n].get_or_insert(NodeConstraint::free(n as u32));
                     if b.vx.is_some() {
                         c.vx = b.vx;
                         c.cx = cx;
@@ -341,13 +346,7 @@ impl Model {
             });
             for n in nodes {
                 if m.position[n][0].abs() <= 1e-12 * size {
-                    let c = cons[n].get_or_insert(NodeConstraint {
-                        node: n as u32,
-                        vx: None,
-                        vy: None,
-                        cx: None,
-                        cy: None,
-                    });
+                    let c = cons[n].get_or_insert(NodeConstraint::free(n as u32));
                     c.vx = Some(0.0);
                     c.cx = None;
                 }
@@ -368,16 +367,11 @@ impl Model {
         for (i, c) in scene.contacts.iter().enumerate() {
             let Some(faces) = &c.surfaces else { continue };
             for (k, ((name, edges), &b)) in faces.iter().zip(&c.bodies).enumerate() {
-                let start = m.bodies[b].nodes.start as u32;
-                let set: std::collections::HashSet<(u32, u32)> = edges
-                    .iter()
-                    .flat_map(|e| [(start + e[0], start + e[1]), (start + e[1], start + e[0])])
-                    .collect();
-                let on_boundary = Surface::of_body(&m, b)
+                if Surface::of_body(&m, b)
+                    .restricted(&m.global_edges(b, edges))
                     .segments
-                    .iter()
-                    .any(|seg| set.contains(&(seg.nodes[0], seg.nodes[1])));
-                if !on_boundary {
+                    .is_empty()
+                {
                     return Err(scene::invalid(
                         scene,
                         format!("contact[{i}].surfaces[{k}]"),
@@ -433,31 +427,22 @@ impl Model {
     /// the edge's inward normal.
     fn pressure_load(&self, p: &scene::Pressure, body: &scene::Body) -> PressureLoad {
         let axi = body.formulation == scene::Formulation::Axisymmetric;
-        let surface = Surface::of_body(self, p.body);
+        // A named curve: the boundary segments among its own line elements.
+        let surface = match &p.group {
+            Some(g) => {
+                Surface::of_body(self, p.body).restricted(&self.global_edges(p.body, &g.edges))
+            }
+            None => Surface::of_body(self, p.body),
+        };
         let inside = |n: u32| {
             let x = self.position[n as usize];
             x[0] >= p.min[0] && x[0] <= p.max[0] && x[1] >= p.min[1] && x[1] <= p.max[1]
         };
-        // A named curve: its own line elements (either direction), on the body's boundary.
-        let start = self.bodies[p.body].nodes.start as u32;
-        let named: Option<std::collections::HashSet<(u32, u32)>> = p.group.as_ref().map(|g| {
-            g.edges
-                .iter()
-                .flat_map(|e| {
-                    let (a, b) = (start + e[0], start + e[1]);
-                    [(a, b), (b, a)]
-                })
-                .collect()
-        });
         let mut force: std::collections::BTreeMap<u32, [f64; 2]> = Default::default();
         let mut edges = 0;
         for seg in &surface.segments {
             let [a, b] = seg.nodes;
-            let selected = match &named {
-                Some(set) => set.contains(&(a, b)),
-                None => inside(a) && inside(b),
-            };
-            if !selected {
+            if !(inside(a) && inside(b)) {
                 continue;
             }
             edges += 1;
@@ -484,6 +469,12 @@ impl Model {
             nodes: force.into_iter().collect(),
             edges,
         }
+    }
+
+    /// Body `body`'s node pairs `edges` (indices within the body) in global node numbers.
+    pub fn global_edges(&self, body: usize, edges: &[[u32; 2]]) -> Vec<[u32; 2]> {
+        let start = self.bodies[body].nodes.start as u32;
+        edges.iter().map(|e| [start + e[0], start + e[1]]).collect()
     }
 
     /// Number of nodes.

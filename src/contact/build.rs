@@ -48,20 +48,11 @@ impl Builder<'_> {
     /// Body `b`'s surface, or with `only` (global node pairs, either direction) the segments
     /// among them and their nodes (a contact limited to named faces).
     fn surface_of(&mut self, b: usize, only: Option<&[[u32; 2]]>) -> Surface {
-        let mut s = self.surface(b);
-        if let Some(edges) = only {
-            let set: std::collections::HashSet<(u32, u32)> = edges
-                .iter()
-                .flat_map(|e| [(e[0], e[1]), (e[1], e[0])])
-                .collect();
-            s.segments
-                .retain(|seg| set.contains(&(seg.nodes[0], seg.nodes[1])));
-            let mut nodes: Vec<u32> = s.segments.iter().flat_map(|seg| seg.nodes).collect();
-            nodes.sort_unstable();
-            nodes.dedup();
-            s.nodes = nodes;
+        let s = self.surface(b);
+        match only {
+            Some(edges) => s.restricted(edges),
+            None => s,
         }
-        s
     }
 
     /// Adds the nodes of `ss` (body `b`'s surface) to `p` as slaves.
@@ -135,13 +126,9 @@ impl Builder<'_> {
         // Named faces: each body's curve edges in global node numbers.
         let faces: Vec<Option<Vec<[u32; 2]>>> = (0..2)
             .map(|k| {
-                c.surfaces.as_ref().map(|s| {
-                    let start = self.model.bodies[c.bodies[k]].nodes.start as u32;
-                    s[k].1
-                        .iter()
-                        .map(|e| [start + e[0], start + e[1]])
-                        .collect()
-                })
+                c.surfaces
+                    .as_ref()
+                    .map(|s| self.model.global_edges(c.bodies[k], &s[k].1))
             })
             .collect();
         let surf = [

@@ -25,6 +25,22 @@ pub struct Surface {
 }
 
 impl Surface {
+    /// The part of this surface on `edges` (global node pairs, either direction): the segments
+    /// among them and their nodes (a named face of a Gmsh body).
+    pub fn restricted(mut self, edges: &[[u32; 2]]) -> Surface {
+        let set: std::collections::HashSet<(u32, u32)> = edges
+            .iter()
+            .flat_map(|e| [(e[0], e[1]), (e[1], e[0])])
+            .collect();
+        self.segments
+            .retain(|seg| set.contains(&(seg.nodes[0], seg.nodes[1])));
+        let mut nodes: Vec<u32> = self.segments.iter().flat_map(|seg| seg.nodes).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        self.nodes = nodes;
+        self
+    }
+
     /// Extracts the surface of body `body`: the edges used by exactly one of its elements.
     pub fn of_body(model: &Model, body: usize) -> Surface {
         let b = &model.bodies[body];
