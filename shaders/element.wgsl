@@ -1,5 +1,7 @@
 // Element stage: one-point 4-node quad, total Lagrangian, one thread per element.
 // Mirrors ricochet::step::element::evaluate (the f64 CPU reference) line by line in f32.
+// A triangle is a collapsed quad (nodes.z == nodes.w): no hourglass control, centroid weights
+// 1/3, one corner to check, the triangle's stable-step length (see the CPU module's notes).
 
 struct Body {
     model: u32,           // 0 linear elastic, 1 neo-Hookean, 2 J2 plastic
@@ -246,6 +248,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s3 = nodes[el.nodes.w];
     let u = array<vec2<f32>, 4>(s0.xy, s1.xy, s2.xy, s3.xy);
     let v = array<vec2<f32>, 4>(s0.zw, s1.zw, s2.zw, s3.zw);
+    let tri = el.nodes.z == el.nodes.w;
+    // Corner weights at the centre: 1/4 each, or 1/3 on a triangle's three corners.
+    let wc = select(vec4<f32>(0.25), vec4<f32>(1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 0.0), tri);
 
     // Reference geometry at the centre.
     let area0 = 0.5 * ((x[2].x - x[0].x) * (x[3].y - x[1].y) - (x[3].x - x[1].x) * (x[2].y - x[0].y));
@@ -267,8 +272,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var a0t = area0 * b.thickness;
     if (axi) {
         let rr = el.radius;
-        zm1 = 0.25 * (u[0].x + u[1].x + u[2].x + u[3].x) / rr;
-        f33d = 0.25 * (v[0].x + v[1].x + v[2].x + v[3].x) / rr;
+        zm1 = dot(wc, vec4<f32>(u[0].x, u[1].x, u[2].x, u[3].x)) / rr;
+        f33d = dot(wc, vec4<f32>(v[0].x, v[1].x, v[2].x, v[3].x)) / rr;
         a0t = area0 * rr;
     }
 
@@ -364,7 +369,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let area = 0.5 * ((xc[2].x - xc[0].x) * (xc[3].y - xc[1].y) - (xc[3].x - xc[1].x) * (xc[2].y - xc[0].y));
     var min_corner = 3.0e38;
-    for (var a = 0; a < 4; a++) {
+    let n_corners = select(4, 1, tri);
+    for (var a = 0; a < n_corners; a++) {
         let p = xc[(a + 3) % 4];
         let c = xc[a];
         let n = xc[(a + 1) % 4];
@@ -382,7 +388,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let side = max(max(dot(d01, d01), dot(d12, d12)), max(dot(d23, d23), dot(d30, d30)));
     let diag = 0.5 * max(dot(d02, d02), dot(d13, d13));
     let aa = abs(area);
-    let length = aa / sqrt(max(side, diag));
+    // A triangle: sqrt(8/3) area / longest side (CPU: TRIANGLE_LENGTH).
+    let length = aa / sqrt(max(side, diag)) * select(1.0, 1.6329932, tri);
     let rho = b.density * area0 / max(aa, 1e-37);
     let c = sqrt(b.wave_modulus / rho);
 
@@ -391,10 +398,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         force[a] = -a0t * vec2<f32>(pk.x * bx[a] + pk.y * by[a], pk.z * bx[a] + pk.w * by[a]);
     }
     if (axi) {
-        // The hoop stress on u_r: dF_33 / du_r,a = 1 / (4 R).
-        let hoop = 0.25 * a0t * p33 / el.radius;
+        // The hoop stress on u_r: dF_33 / du_r,a = N_a / R.
+        let hoop = a0t * p33 / el.radius;
         for (var a = 0; a < 4; a++) {
-            force[a].x -= hoop;
+            force[a].x -= wc[a] * hoop;
         }
     }
 
@@ -408,7 +415,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var hg_stored = 0.0;
     var hg_q = vec2<f32>(0.0);
     var hg_rate = vec2<f32>(0.0);
-    if (b.hourglass == 2u) {
+    if (b.hourglass == 2u && !tri) {
         // Scaled with the shear modulus 2 mu (see ElementParams::hourglass_modulus).
         let k = b.hourglass_coefficient * 2.0 * b.mu * a0t * bb / gg;
         var q = vec2<f32>(0.0);
@@ -419,7 +426,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             force[a] -= k * gamma[a] * q;
         }
         hg_stored = 0.5 * k * dot(q, q);
-    } else if (b.hourglass == 1u) {
+    } else if (b.hourglass == 1u && !tri) {
         let rho_c = sqrt(2.0 * b.mu * b.density);
         let damp = b.hourglass_coefficient * rho_c * a0t * sqrt(bb) / gg;
         for (var a = 0; a < 4; a++) {
@@ -463,9 +470,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             force[a] -= a0t * vec2<f32>(bulk_p.x * bx[a] + bulk_p.y * by[a], bulk_p.z * bx[a] + bulk_p.w * by[a]);
         }
         if (axi) {
-            let hoop = 0.25 * a0t * bulk_hoop / el.radius;
+            let hoop = a0t * bulk_hoop / el.radius;
             for (var a = 0; a < 4; a++) {
-                force[a].x -= hoop;
+                force[a].x -= wc[a] * hoop;
             }
         }
     }

@@ -1,5 +1,6 @@
 //! Gmsh meshes: the elements of one physical surface of an MSH 4.1 file (ASCII or binary), read
-//! with the `mshio` crate, as a body's nodes and counter-clockwise quads. `mshio` reads the
+//! with the `mshio` crate, as a body's nodes and counter-clockwise quads and triangles (a
+//! triangle as the collapsed quad `[a, b, c, c]`, see [`crate::step::element`]). `mshio` reads the
 //! entities, nodes and elements; the names of the physical groups (`$PhysicalNames`) are read
 //! here. Every problem is reported as a sentence naming the group and, for an element, its Gmsh
 //! tag and nodes; the scene parser puts it in an [`crate::Error::Invalid`] with the scene file,
@@ -20,9 +21,9 @@ pub struct SurfaceMesh {
     pub nodes: Vec<[f64; 2]>,
     /// Gmsh tag of each node.
     pub node_tags: Vec<u64>,
-    /// Quads as indices into `nodes`, counter-clockwise.
+    /// Quads and triangles (`[a, b, c, c]`) as indices into `nodes`, counter-clockwise.
     pub quads: Vec<[u32; 4]>,
-    /// Gmsh tag of each quad.
+    /// Gmsh tag of each element.
     pub element_tags: Vec<u64>,
     /// Quads that were clockwise in the file and were turned counter-clockwise.
     pub reoriented: usize,
@@ -57,7 +58,12 @@ pub struct PhysicalName {
 }
 
 impl SurfaceMesh {
-    /// The quad of smallest area: its index, area and shortest edge.
+    /// The number of triangles among the elements (collapsed quads `[a, b, c, c]`).
+    pub fn triangles(&self) -> usize {
+        self.quads.iter().filter(|q| q[2] == q[3]).count()
+    }
+
+    /// The element of smallest area: its index, area and shortest edge.
     pub fn smallest(&self) -> Option<(usize, f64, f64)> {
         let mut best: Option<(usize, f64, f64)> = None;
         for (i, q) in self.quads.iter().enumerate() {
@@ -66,6 +72,7 @@ impl SurfaceMesh {
                 * ((c[2][0] - c[0][0]) * (c[3][1] - c[1][1])
                     - (c[3][0] - c[1][0]) * (c[2][1] - c[0][1]));
             let edge = (0..4)
+                .filter(|&k| q[k] != q[(k + 1) % 4])
                 .map(|k| {
                     let (a, b) = (c[k], c[(k + 1) % 4]);
                     (b[0] - a[0]).hypot(b[1] - a[1])
@@ -170,13 +177,13 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>, String> {
     std::fs::read(path).map_err(|e| format!("cannot read the mesh file: {e}"))
 }
 
-/// The quads of physical surface `group` of the MSH 4.1 file `bytes`.
+/// The quads and triangles of physical surface `group` of the MSH 4.1 file `bytes`.
 ///
 /// # Errors
 /// A sentence naming the group and the problem: another MSH version, a group that does not
-/// exist or is not a surface, elements other than 4-node quads in it (type and count), a node
-/// off the xy-plane, an element whose corners do not make a convex quad of positive area (its
-/// Gmsh tag and nodes).
+/// exist or is not a surface, elements other than 4-node quads and 3-node triangles in it (type
+/// and count), a node off the xy-plane, an element whose corners do not make a convex element of
+/// positive area (its Gmsh tag and nodes).
 pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
     let v = version(bytes)?;
     if v != "4.1" {
@@ -240,17 +247,23 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
             if b.entity_dim != 2 || !entities.contains(&b.entity_tag) {
                 continue;
             }
-            if b.element_type == ElementType::Qua4 {
+            let corners = match b.element_type {
+                ElementType::Qua4 => 4,
+                ElementType::Tri3 => 3,
+                _ => 0,
+            };
+            if corners > 0 {
                 for e in &b.elements {
                     let n = e.nodes.as_slice();
-                    if n.len() != 4 {
+                    if n.len() != corners {
                         return Err(format!(
-                            "element {} of group `{group}` has {} nodes, not 4",
+                            "element {} of group `{group}` has {} nodes, not {corners}",
                             e.element_tag,
                             n.len()
                         ));
                     }
-                    raw.push((e.element_tag, [n[0], n[1], n[2], n[3]]));
+                    // A triangle is a collapsed quad [a, b, c, c] (see ricochet::step::element).
+                    raw.push((e.element_tag, [n[0], n[1], n[2], n[corners - 1]]));
                 }
             } else {
                 match other.iter_mut().find(|o| o.0 == b.element_type) {
@@ -265,12 +278,8 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
             .iter()
             .map(|(t, n)| format!("{n} x {t:?} (Gmsh type {})", *t as u8))
             .collect();
-        let hint = if other.iter().all(|o| o.0 == ElementType::Tri3) {
-            "ricochet reads 4-node quads only so far: recombine the surface (Mesh.RecombineAll = 1 \
-             with Mesh.SubdivisionAlgorithm = 1 gives quads only)"
-        } else {
-            "ricochet reads first-order 4-node quads (Mesh.ElementOrder = 1, Mesh.RecombineAll = 1)"
-        };
+        let hint = "ricochet reads first-order elements, 4-node quads and 3-node triangles \
+                    (Mesh.ElementOrder = 1)";
         return Err(format!(
             "group `{group}` has elements ricochet cannot use: {}; {hint}",
             list.join(", ")
@@ -334,6 +343,7 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
     let mut element_tags = Vec::with_capacity(raw.len());
     let mut reoriented = 0;
     for (etag, q) in &raw {
+        let tri = q[2] == q[3];
         let mut l = q.map(|t| index[&t]);
         let p = |k: usize| nodes[l[k] as usize];
         let area2: f64 = (0..4)
@@ -343,19 +353,23 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
             })
             .sum();
         if area2 < 0.0 {
-            l = [l[0], l[3], l[2], l[1]];
+            l = if tri {
+                [l[0], l[2], l[1], l[1]]
+            } else {
+                [l[0], l[3], l[2], l[1]]
+            };
             reoriented += 1;
         }
         let p = |k: usize| nodes[l[k] as usize];
         // Corner Jacobians (cross products of the two edges at each corner), all positive for
-        // a convex quad of positive area.
+        // a convex quad of positive area; a triangle has the one (its corner 0).
         let scale = (0..4)
             .map(|k| {
                 let (a, b) = (p(k), p((k + 1) % 4));
                 (b[0] - a[0]).hypot(b[1] - a[1])
             })
             .fold(0.0f64, f64::max);
-        let worst = (0..4)
+        let worst = (0..if tri { 1 } else { 4 })
             .map(|k| {
                 let (a, b, c) = (p((k + 3) % 4), p(k), p((k + 1) % 4));
                 let (e1, e2) = ([c[0] - b[0], c[1] - b[1]], [a[0] - b[0], a[1] - b[1]]);
@@ -363,10 +377,14 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
             })
             .fold(f64::INFINITY, f64::min);
         if worst.is_nan() || worst <= 1e-12 * scale * scale {
+            let tags: Vec<String> = q[..if tri { 3 } else { 4 }]
+                .iter()
+                .map(|t| t.to_string())
+                .collect();
             return Err(format!(
-                "element {etag} of group `{group}` (nodes {} {} {} {}) is inverted or has zero \
-                 area: its smallest corner Jacobian is {worst:e} (edges up to {scale:e})",
-                q[0], q[1], q[2], q[3]
+                "element {etag} of group `{group}` (nodes {}) is inverted or has zero area: its \
+                 smallest corner Jacobian is {worst:e} (edges up to {scale:e})",
+                tags.join(" ")
             ));
         }
         quads.push(l);

@@ -832,10 +832,11 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             .find(|sb| sb.name == b.name)
             .map(|sb| &sb.mesh)
         {
+            let tris = mesh.triangles();
             println!(
-                "           Gmsh {} group `{group}`: {} quads (4-node), {} nodes{}",
+                "           Gmsh {} group `{group}`: {} quads (4-node), {tris} triangles (3-node), {} nodes{}",
                 file.display(),
-                mesh.quads.len(),
+                mesh.quads.len() - tris,
                 mesh.nodes.len(),
                 if mesh.reoriented > 0 {
                     format!(", {} turned counter-clockwise", mesh.reoriented)

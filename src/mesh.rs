@@ -15,7 +15,8 @@ pub struct Mesh {
     pub origin: [f64; 2],
     /// Node coordinates relative to `origin`.
     pub nodes: Vec<[f64; 2]>,
-    /// Quads, counter-clockwise node indices.
+    /// Quads, counter-clockwise node indices; a triangle is the collapsed quad `[a, b, c, c]`
+    /// (explicit and Gmsh meshes; see [`crate::step::element`]).
     pub quads: Vec<[u32; 4]>,
 }
 
@@ -45,7 +46,7 @@ impl Mesh {
         }
     }
 
-    /// Signed area of quad `q` (positive when counter-clockwise).
+    /// Signed area of quad or triangle `q` (positive when counter-clockwise).
     pub fn quad_area(&self, q: usize) -> f64 {
         let c = self.quads[q].map(|i| self.nodes[i as usize]);
         0.5 * ((c[2][0] - c[0][0]) * (c[3][1] - c[1][1])
@@ -223,10 +224,19 @@ pub fn graded_disk(
     }
 }
 
-/// Whether quad `q` of `nodes` is strictly convex and counter-clockwise.
+/// Whether quad `q` of `nodes` is strictly convex and counter-clockwise (a triangle
+/// `[a, b, c, c]`: counter-clockwise with positive area).
 fn convex_ccw(nodes: &[[f64; 2]], q: &[u32; 4]) -> bool {
     let p = q.map(|i| nodes[i as usize]);
-    (0..4).all(|a| {
+    let corners = if crate::step::element::is_triangle(q) {
+        if q[0] == q[1] || q[1] == q[2] || q[0] == q[2] {
+            return false;
+        }
+        1
+    } else {
+        4
+    };
+    (0..corners).all(|a| {
         let (o, s, t) = (p[a], p[(a + 1) % 4], p[(a + 2) % 4]);
         (s[0] - o[0]) * (t[1] - s[1]) - (s[1] - o[1]) * (t[0] - s[0]) > 0.0
     })

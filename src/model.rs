@@ -10,7 +10,10 @@ use crate::contact::Overlap;
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::scene::{self, Scene};
-use crate::step::element::{min_corner_ratio, quad_geometry, ElementParams, QuadGeometry};
+use crate::step::element::{
+    element_centre, is_triangle, is_triangle_geometry, min_corner_ratio, quad_geometry,
+    ElementParams, QuadGeometry,
+};
 
 /// One body's slice of the model.
 #[derive(Debug, Clone)]
@@ -202,14 +205,26 @@ impl Model {
             let mut mass = vec![0.0; mesh.nodes.len()];
             for (qi, q) in mesh.quads.iter().enumerate() {
                 let x: [[f64; 2]; 4] = q.map(|i| mesh.nodes[i as usize]);
+                let tri = is_triangle(q);
+                if tri && (q[0] == q[1] || q[1] == q[2] || q[2] == q[0])
+                    || tri != is_triangle_geometry(&x)
+                {
+                    return Err(scene::invalid(
+                        scene,
+                        format!("body[{bi}].mesh"),
+                        format!("element {qi} = {q:?}"),
+                        "two corners of the element are the same node or the same point (a triangle \
+                         is [a, b, c] or [a, b, c, c] with a, b, c distinct)",
+                    ));
+                }
                 let g = quad_geometry(&x);
                 let corner = min_corner_ratio(&x, g.area);
                 if !(g.area > 0.0 && corner > 1e-8) {
                     return Err(scene::invalid(
                         scene,
                         format!("body[{bi}].mesh"),
-                        format!("quad {qi} = {q:?}, area {:e}", g.area),
-                        "inverted, zero-area or non-convex element (quads must be convex and counter-clockwise)",
+                        format!("{} {qi} = {q:?}, area {:e}", if tri { "triangle" } else { "quad" }, g.area),
+                        "inverted, zero-area or non-convex element (elements must be convex and counter-clockwise)",
                     ));
                 }
                 let lumped = if axi {
@@ -220,8 +235,7 @@ impl Model {
                 for a in 0..4 {
                     mass[q[a] as usize] += lumped[a];
                 }
-                let cx = 0.25 * (x[0][0] + x[1][0] + x[2][0] + x[3][0]);
-                let cy = 0.25 * (x[0][1] + x[1][1] + x[2][1] + x[3][1]);
+                let [cx, cy] = element_centre(&x);
                 m.corners.push(x.map(|p| [p[0] - cx, p[1] - cy]));
                 if any_axi {
                     m.radius.push(if axi { mesh.origin[0] + cx } else { 0.0 });
@@ -532,12 +546,30 @@ pub fn lumped_mass_axisymmetric(x: &[[f64; 2]; 4], rho: f64, x0: f64) -> [f64; 4
     lumped_mass_weighted(x, rho, Some(x0))
 }
 
-/// Row-sum lumped masses of a bilinear quad: `rho_t * integral of N_a`, by 2x2 Gauss quadrature.
+/// Row-sum lumped masses of a bilinear quad: `rho_t * integral of N_a`, by 2x2 Gauss quadrature;
+/// of a triangle (collapsed quad, see [`crate::step::element`]): `rho_t A / 3` on its three
+/// nodes (the repeated corner gets 0).
 pub fn lumped_mass(x: &[[f64; 2]; 4], rho_t: f64) -> [f64; 4] {
     lumped_mass_weighted(x, rho_t, None)
 }
 
 fn lumped_mass_weighted(x: &[[f64; 2]; 4], rho_t: f64, x0: Option<f64>) -> [f64; 4] {
+    if is_triangle_geometry(x) {
+        // Triangle: rho_t integral of N_a = rho_t A / 3; axisymmetric, with r = sum N_b r_b and
+        // integral of N_a N_b = A (1 + delta_ab) / 12: rho A (2 r_a + r_b + r_c) / 12.
+        let area = 0.5
+            * ((x[1][0] - x[0][0]) * (x[2][1] - x[0][1])
+                - (x[2][0] - x[0][0]) * (x[1][1] - x[0][1]));
+        let m: [f64; 3] = match x0 {
+            None => [rho_t * area / 3.0; 3],
+            Some(x0) => {
+                let r = [x0 + x[0][0], x0 + x[1][0], x0 + x[2][0]];
+                let sum = r[0] + r[1] + r[2];
+                r.map(|ra| rho_t * area * (ra + sum) / 12.0)
+            }
+        };
+        return [m[0], m[1], m[2], 0.0];
+    }
     let g = 1.0 / 3f64.sqrt();
     let mut m = [0.0; 4];
     let xi_a = [-1.0, 1.0, 1.0, -1.0];
@@ -579,5 +611,24 @@ mod tests {
         let total: f64 = m.iter().sum();
         assert!((total - 3.0 * area).abs() < 1e-12 * total);
         assert!(m.iter().all(|&w| w > 0.0));
+    }
+    #[test]
+    fn lumped_mass_of_a_triangle_is_a_third_each_and_its_axisymmetric_mass_is_exact() {
+        let t = [[0.3, 0.1], [1.2, 0.4], [0.5, 1.1]];
+        let x = [t[0], t[1], t[2], t[2]];
+        let area = quad_geometry(&x).area;
+        let m = lumped_mass(&x, 3.0);
+        assert_eq!(m[3], 0.0);
+        for w in &m[..3] {
+            assert!((w - area).abs() < 1e-15, "{w} vs {}", area);
+        }
+        // Per radian: rho times the integral of r over the triangle, A (r_a + r_b + r_c) / 3,
+        // with the origin at x0 = 0.7.
+        let m = lumped_mass_axisymmetric(&x, 2.0, 0.7);
+        let total: f64 = m.iter().sum();
+        let exact = 2.0 * area * (2.1 + t[0][0] + t[1][0] + t[2][0]) / 3.0;
+        assert!((total - exact).abs() < 1e-14 * exact, "{total} vs {exact}");
+        // The node farther from the axis carries more.
+        assert!(m[1] > m[2] && m[2] > m[0]);
     }
 }

@@ -50,6 +50,28 @@ mod fixed {
             .transpose()
     }
 
+    /// `Option<Vec<[i64; 4]>>` of quads `[a, b, c, d]` and triangles `[a, b, c]` (with
+    /// `#[serde(default)]`): a triangle becomes the collapsed quad `[a, b, c, c]`.
+    pub fn elements<'de, D>(d: D) -> Result<Option<Vec<[i64; 4]>>, D::Error>
+    where
+        D: Deserializer<'de>,
+    {
+        Option::<Vec<Vec<i64>>>::deserialize(d)?
+            .map(|rows| {
+                rows.into_iter()
+                    .map(|r| match r[..] {
+                        [a, b, c] => Ok([a, b, c, c]),
+                        [a, b, c, e] => Ok([a, b, c, e]),
+                        _ => Err(D::Error::invalid_length(
+                            r.len(),
+                            &"3 node indices (a triangle) or 4 (a quad)",
+                        )),
+                    })
+                    .collect()
+            })
+            .transpose()
+    }
+
     /// `Option<[[f64; 2]; 2]>` (with `#[serde(default)]`).
     pub fn matrix<'de, D>(d: D) -> Result<Option<[[f64; 2]; 2]>, D::Error>
     where
@@ -212,7 +234,7 @@ struct RawMesh {
     disk: Option<RawDisk>,
     #[serde(default, deserialize_with = "fixed::list")]
     nodes: Option<Vec<[f64; 2]>>,
-    #[serde(default, deserialize_with = "fixed::list")]
+    #[serde(default, deserialize_with = "fixed::elements")]
     quads: Option<Vec<[i64; 4]>>,
     gmsh: Option<String>,
     group: Option<String>,
@@ -428,11 +450,12 @@ pub struct Hourglass {
 /// How a body is meshed.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MeshSpec {
-    /// Nodes and counter-clockwise quads given explicitly (absolute coordinates).
+    /// Nodes and counter-clockwise quads and triangles given explicitly (absolute coordinates).
     Explicit {
         /// Node coordinates.
         nodes: Vec<[f64; 2]>,
-        /// Quads as 0-based node indices, counter-clockwise.
+        /// Quads as 0-based node indices, counter-clockwise; a triangle `[a, b, c]` of the scene
+        /// is the collapsed quad `[a, b, c, c]` here (see [`crate::step::element`]).
         quads: Vec<[u32; 4]>,
     },
     /// A structured grid over an axis-aligned rectangle.
@@ -1685,6 +1708,11 @@ impl Validator<'_> {
             for (i, q) in out.iter().enumerate() {
                 for k in 0..4 {
                     let e = (q[k], q[(k + 1) % 4]);
+                    if e.0 == e.1 {
+                        // The collapsed side of a triangle [a, b, c, c] (a repeated node
+                        // elsewhere is refused when the model is built).
+                        continue;
+                    }
                     if let Some(j) = edges.insert(e, i) {
                         return Err(self.invalid(
                             format!("{key}.quads[{i}]"),

@@ -51,10 +51,13 @@ def main(out_dir):
         cd = {k: ncomp(v[0]) for k, v in mesh.cell_data.items()}
         pts = np.asarray(mesh.points, dtype=np.float64)
         ref = pts[:, :2] - np.asarray(mesh.point_data["displacement"], dtype=np.float64)[:, :2]
-        s = np.asarray(mesh.cell_data["stress"][0], dtype=np.float64)
+        # Cell data comes in one block per run of cells of one type (quads, triangles).
+        s = np.concatenate([np.asarray(b, dtype=np.float64) for b in mesh.cell_data["stress"]])
         sxx, syy, sxy, szz = s[:, 0], s[:, 1], s[:, 2], s[:, 3]
         vm = np.sqrt(0.5 * ((sxx - syy) ** 2 + (syy - szz) ** 2 + (szz - sxx) ** 2 + 6 * sxy**2))
-        vm_file = np.asarray(mesh.cell_data["von_mises"][0], dtype=np.float64).reshape(-1)
+        vm_file = np.concatenate(
+            [np.asarray(b, dtype=np.float64).reshape(-1) for b in mesh.cell_data["von_mises"]]
+        )
         scale = max(float(np.max(np.abs(vm))), 1e-300)
         print(
             json.dumps(

@@ -171,8 +171,7 @@ fn remove(model: &mut Model, scene: &Scene) -> Result<bool> {
                     "moving the nodes that overlap a contact surface at t = 0 onto it inverts this element: separate the bodies",
                 ));
             }
-            let cx = 0.25 * (x[0][0] + x[1][0] + x[2][0] + x[3][0]);
-            let cy = 0.25 * (x[0][1] + x[1][1] + x[2][1] + x[3][1]);
+            let [cx, cy] = crate::step::element::element_centre(&x);
             model.corners[e] = x.map(|p| [p[0] - cx, p[1] - cy]);
         }
         model.initial_overlaps.extend(found);

@@ -49,6 +49,10 @@ impl Surface {
             let q = model.quads[e];
             for a in 0..4 {
                 let (i, j) = (q[a], q[(a + 1) % 4]);
+                if i == j {
+                    // The collapsed side of a triangle.
+                    continue;
+                }
                 edges.push(([i.min(j), i.max(j)], [i, j], e as u32));
             }
         }

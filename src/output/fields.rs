@@ -409,6 +409,15 @@ fn arrays(model: &Model, snap: &Snapshot, body: &crate::model::BodyModel) -> [Ve
             [p[0] + u[0], p[1] + u[1]]
         }),
     }];
+    // Quads as VTK_QUAD (9); triangles, the collapsed quads [a, b, c, c], as VTK_TRIANGLE (5)
+    // with their three nodes.
+    let tri = |e: usize| crate::step::element::is_triangle(&model.quads[e]);
+    let mut offsets = Vec::with_capacity(elems.len());
+    let mut end = 0i32;
+    for e in elems.clone() {
+        end += if tri(e) { 3 } else { 4 };
+        offsets.push(end);
+    }
     let cells = vec![
         Array {
             name: "connectivity",
@@ -417,7 +426,13 @@ fn arrays(model: &Model, snap: &Snapshot, body: &crate::model::BodyModel) -> [Ve
             values: Values::I32(
                 elems
                     .clone()
-                    .flat_map(|e| model.quads[e].map(|i| (i as usize - nodes.start) as i32))
+                    .flat_map(|e| {
+                        let q = model.quads[e];
+                        q[..if tri(e) { 3 } else { 4 }]
+                            .iter()
+                            .map(|&i| (i as usize - nodes.start) as i32)
+                            .collect::<Vec<_>>()
+                    })
                     .collect(),
             ),
         },
@@ -425,13 +440,13 @@ fn arrays(model: &Model, snap: &Snapshot, body: &crate::model::BodyModel) -> [Ve
             name: "offsets",
             components: 1,
             extra: "",
-            values: Values::I32((1..=elems.len()).map(|k| 4 * k as i32).collect()),
+            values: Values::I32(offsets),
         },
         Array {
             name: "types",
             components: 1,
             extra: "",
-            values: Values::U8(vec![9; elems.len()]),
+            values: Values::U8(elems.clone().map(|e| if tri(e) { 5 } else { 9 }).collect()),
         },
     ];
     let point_data = vec![

@@ -1,5 +1,15 @@
 //! The element stage, CPU reference: one-point 4-node quad in total-Lagrangian form.
 //!
+//! A 3-node triangle is a collapsed quad: its last corner repeats its third (`[a, b, c, c]`),
+//! which [`is_triangle`] and [`QuadGeometry::triangle`] recognise. The quad's uniform gradients
+//! then equal the constant-strain triangle's exactly (the repeated corner's two columns sum to
+//! the triangle's third), every nodal displacement of a triangle is a linear field, to which the
+//! hourglass vector is orthogonal, so there is no hourglass mode and no hourglass force; what
+//! differs is kept apart here: no hourglass control (not even its round-off), the centroid
+//! weights 1/3 (axisymmetric hoop terms), the corner check on the one real corner set and the
+//! stable-step length of the triangle ([`characteristic_length`]). One kernel, one connectivity
+//! layout and one node gather serve both kinds.
+//!
 //! For each element, from its reference node offsets `dx`, displacements `u` and the lagged
 //! half-step velocities `v` (v^{n-1/2}), it computes
 //! - the nodal forces (`f = -A0 t P b0` for the stress, plus hourglass and bulk-viscosity forces),
@@ -16,6 +26,45 @@ use super::plastic::{j2_elastic, j2_stress, step_plastic_work, PlasticState};
 
 /// The sign vector of the hourglass mode of a 4-node quad.
 pub const HOURGLASS_BASE: [f64; 4] = [1.0, -1.0, 1.0, -1.0];
+
+/// sqrt(8/3): the stable-step length of a triangle is this times area / longest side (see
+/// [`characteristic_length`]).
+pub const TRIANGLE_LENGTH: f64 = 1.632_993_161_855_452;
+
+/// Whether the element with nodes `q` is a triangle (a collapsed quad `[a, b, c, c]`).
+#[inline]
+pub fn is_triangle(q: &[u32; 4]) -> bool {
+    q[2] == q[3]
+}
+
+/// Whether the corners `x` are those of a triangle (the last repeats the third).
+#[inline]
+pub fn is_triangle_geometry(x: &[[f64; 2]; 4]) -> bool {
+    x[2] == x[3]
+}
+
+/// Weights of the corners at the element's centre: 1/4 each for a quad, 1/3 on the three
+/// corners of a triangle (its centroid; the repeated corner gets 0).
+#[inline]
+pub fn centre_weights(triangle: bool) -> [f64; 4] {
+    if triangle {
+        [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 0.0]
+    } else {
+        [0.25; 4]
+    }
+}
+
+/// The centre of the element with corners `x` (the centroid of a triangle).
+#[inline]
+pub fn element_centre(x: &[[f64; 2]; 4]) -> [f64; 2] {
+    let w = centre_weights(is_triangle_geometry(x));
+    let mut c = [0.0; 2];
+    for a in 0..4 {
+        c[0] += w[a] * x[a][0];
+        c[1] += w[a] * x[a][1];
+    }
+    c
+}
 
 /// Constitutive and control parameters shared by all elements of one body.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -193,6 +242,8 @@ pub struct QuadGeometry {
     /// Reference radius of the centre (axisymmetric elements; 0 otherwise, see
     /// [`crate::model::Model::geometry`]).
     pub radius: f64,
+    /// A triangle (collapsed quad): no hourglass mode, so `gamma` and the hourglass factors are 0.
+    pub triangle: bool,
 }
 
 /// Centre gradients and hourglass vector of the quad with corners `x` (counter-clockwise).
@@ -215,6 +266,19 @@ pub fn quad_geometry(x: &[[f64; 2]; 4]) -> QuadGeometry {
     ];
     let bb: f64 = (0..4).map(|a| bx[a] * bx[a] + by[a] * by[a]).sum();
     let gg: f64 = gamma.iter().map(|x| x * x).sum();
+    if is_triangle_geometry(x) {
+        return QuadGeometry {
+            area,
+            inv_area: 1.0 / area,
+            hourglass_stiffness: 0.0,
+            hourglass_viscous: 0.0,
+            radius: 0.0,
+            bx,
+            by,
+            gamma: [0.0; 4],
+            triangle: true,
+        };
+    }
     QuadGeometry {
         area,
         inv_area: 1.0 / area,
@@ -224,11 +288,19 @@ pub fn quad_geometry(x: &[[f64; 2]; 4]) -> QuadGeometry {
         bx,
         by,
         gamma,
+        triangle: false,
     }
 }
 
 /// Characteristic length of a quad: area over max(longest side, longest diagonal / sqrt 2).
 /// Equal to the side for a square, to the short side for a thin rectangle.
+///
+/// A triangle (collapsed quad, whose longest side is then the maximum) gets [`TRIANGLE_LENGTH`]
+/// times that, sqrt(2/3) of its smallest altitude: with lumped masses A/3, the largest
+/// eigenfrequency of a constant-strain triangle is at most 2 c / (sqrt(2/3) h_min), for
+/// c^2 = (lambda + 2 mu + max(lambda, 0)) / rho, on every shape and Poisson ratio (the bound is
+/// reached by slender isosceles triangles at nu = 0; the unit test below checks it against the
+/// element's eigenvalues).
 #[inline]
 pub fn characteristic_length(x: &[[f64; 2]; 4], area: f64) -> f64 {
     let d = |a: usize, b: usize| {
@@ -238,14 +310,21 @@ pub fn characteristic_length(x: &[[f64; 2]; 4], area: f64) -> f64 {
     };
     let side = d(0, 1).max(d(1, 2)).max(d(2, 3)).max(d(3, 0));
     let diag = 0.5 * d(0, 2).max(d(1, 3));
-    area / side.max(diag).sqrt()
+    let l = area / side.max(diag).sqrt();
+    if is_triangle_geometry(x) {
+        TRIANGLE_LENGTH * l
+    } else {
+        l
+    }
 }
 
-/// Smallest corner cross product of `x` (twice the area of the corner's triangle).
+/// Smallest corner cross product of `x` (twice the area of the corner's triangle). A triangle
+/// has one: its corners 0 and 1 (corners 2 and 3 meet a zero-length side).
 #[inline]
 pub fn min_corner_cross(x: &[[f64; 2]; 4]) -> f64 {
+    let corners = if is_triangle_geometry(x) { 1 } else { 4 };
     let mut m = f64::INFINITY;
-    for a in 0..4 {
+    for a in 0..corners {
         let p = x[(a + 3) % 4];
         let c = x[a];
         let n = x[(a + 1) % 4];
@@ -254,17 +333,11 @@ pub fn min_corner_cross(x: &[[f64; 2]; 4]) -> f64 {
     m
 }
 
-/// Smallest corner Jacobian of `x`, relative to the quad's area (1 for a parallelogram).
+/// Smallest corner Jacobian of `x`, relative to the quad's area (1 for a parallelogram, 2 for a
+/// triangle).
 #[inline]
 pub fn min_corner_ratio(x: &[[f64; 2]; 4], area: f64) -> f64 {
-    let mut m = f64::INFINITY;
-    for a in 0..4 {
-        let p = x[(a + 3) % 4];
-        let c = x[a];
-        let n = x[(a + 1) % 4];
-        let cross = (n[0] - c[0]) * (p[1] - c[1]) - (n[1] - c[1]) * (p[0] - c[0]);
-        m = m.min(cross);
-    }
+    let m = min_corner_cross(x);
     if area.abs() > 0.0 {
         m / area.abs()
     } else {
@@ -323,9 +396,10 @@ pub fn evaluate_state(
     // Axisymmetric: the hoop stretch F_33 = r / R at the centre (N_a = 1/4 there), its rate, and
     // the volume per radian A0 R instead of A0 t.
     let axi = p.formulation == Formulation::Axisymmetric;
+    let wc = centre_weights(g.triangle);
     let (f33, f33d, a0t) = if axi {
-        let ur = 0.25 * (u[0][0] + u[1][0] + u[2][0] + u[3][0]);
-        let vr = 0.25 * (v[0][0] + v[1][0] + v[2][0] + v[3][0]);
+        let ur: f64 = (0..4).map(|a| wc[a] * u[a][0]).sum();
+        let vr: f64 = (0..4).map(|a| wc[a] * v[a][0]).sum();
         (1.0 + ur / g.radius, vr / g.radius, g.area * g.radius)
     } else {
         (1.0, 0.0, g.area * p.thickness)
@@ -377,10 +451,10 @@ pub fn evaluate_state(
         force[a][1] = -a0t * (pk[2] * g.bx[a] + pk[3] * g.by[a]);
     }
     if axi {
-        // The hoop stress on u_r: dF_33 / du_r,a = N_a / R = 1 / (4 R).
-        let hoop = 0.25 * a0t * p33 / g.radius;
-        for fa in &mut force {
-            fa[0] -= hoop;
+        // The hoop stress on u_r: dF_33 / du_r,a = N_a / R (N_a = 1/4, or 1/3 on a triangle).
+        let hoop = a0t * p33 / g.radius;
+        for a in 0..4 {
+            force[a][0] -= wc[a] * hoop;
         }
     }
 
@@ -388,7 +462,13 @@ pub fn evaluate_state(
     let mut hourglass_stored = 0.0;
     let mut hourglass_q = [0.0; 2];
     let mut hourglass_work = 0.0;
-    match p.hourglass {
+    // A triangle has no hourglass mode (see the module documentation).
+    let hourglass = if g.triangle {
+        HourglassForm::None
+    } else {
+        p.hourglass
+    };
+    match hourglass {
         HourglassForm::None => {}
         HourglassForm::Stiffness => {
             let k = p.hourglass_coefficient * p.hourglass_modulus * a0t * g.hourglass_stiffness;
@@ -467,9 +547,9 @@ pub fn evaluate_state(
             force[a][1] -= a0t * (bulk_p[2] * g.bx[a] + bulk_p[3] * g.by[a]);
         }
         if axi {
-            let hoop = 0.25 * a0t * bulk_hoop / g.radius;
-            for fa in &mut force {
-                fa[0] -= hoop;
+            let hoop = a0t * bulk_hoop / g.radius;
+            for a in 0..4 {
+                force[a][0] -= wc[a] * hoop;
             }
         }
         // Dissipated: 1/2 A0 t (P^{n-1} + P^n) : dH, dH = dt_prev Fdot.
@@ -707,5 +787,141 @@ mod tests {
         let out = evaluate(&p, &SQUARE, &zero, &zero, &Dissipation::default(), 0.0);
         let c = (210e9f64 / 7850.0).sqrt();
         assert!((out.dt - 1.0 / c).abs() < 1e-12 / c);
+    }
+    /// A triangle `[a, b, c, c]` of corners `t`.
+    fn collapsed(t: [[f64; 2]; 3]) -> [[f64; 2]; 4] {
+        [t[0], t[1], t[2], t[2]]
+    }
+
+    fn elastic(nu: f64, hg: HourglassForm) -> ElementParams {
+        let m = Material {
+            name: "m".into(),
+            model: MaterialModel::LinearElastic,
+            density: 7850.0,
+            youngs_modulus: 210e9,
+            poisson_ratio: nu,
+            plasticity: None,
+        };
+        ElementParams::new(&m, Formulation::PlaneStrain, 0.01, hg, 0.1, (0.0, 0.0))
+    }
+
+    /// The forces of a linear-elastic triangle for the nodal displacements `u` of its three
+    /// nodes (the repeated corner's force added to its node).
+    fn triangle_forces(p: &ElementParams, x: &[[f64; 2]; 4], u: [[f64; 2]; 3]) -> [[f64; 2]; 3] {
+        let ue = [u[0], u[1], u[2], u[2]];
+        let out = evaluate(p, x, &ue, &[[0.0; 2]; 4], &Dissipation::default(), 0.0);
+        let f = out.force;
+        [f[0], f[1], [f[2][0] + f[3][0], f[2][1] + f[3][1]]]
+    }
+
+    #[test]
+    fn a_collapsed_quad_is_the_constant_strain_triangle_without_hourglass_forces() {
+        let t = [[0.1, -0.2], [1.3, 0.15], [0.4, 0.9]];
+        let x = collapsed(t);
+        let g = quad_geometry(&x);
+        assert!(g.triangle && g.gamma == [0.0; 4]);
+        // The CST's gradients: b_a = (y_b - y_c) / 2A, c_a = (x_c - x_b) / 2A (a, b, c cyclic).
+        let area = 0.5
+            * ((t[1][0] - t[0][0]) * (t[2][1] - t[0][1])
+                - (t[2][0] - t[0][0]) * (t[1][1] - t[0][1]));
+        assert!((g.area - area).abs() < 1e-15);
+        for a in 0..3 {
+            let (b, c) = (t[(a + 1) % 3], t[(a + 2) % 3]);
+            let (bx, by) = if a == 2 {
+                (g.bx[2] + g.bx[3], g.by[2] + g.by[3])
+            } else {
+                (g.bx[a], g.by[a])
+            };
+            assert!((bx - (b[1] - c[1]) / (2.0 * area)).abs() < 1e-12, "b_{a}");
+            assert!((by - (c[0] - b[0]) / (2.0 * area)).abs() < 1e-12, "c_{a}");
+        }
+        // Every hourglass form gives the same forces as none: a triangle has no hourglass mode.
+        let u = [[1e-4, -3e-5], [-2e-5, 7e-5], [4e-5, 1e-5]];
+        let none = triangle_forces(&elastic(0.3, HourglassForm::None), &x, u);
+        for hg in [HourglassForm::Stiffness, HourglassForm::Viscous] {
+            let p = elastic(0.3, hg);
+            assert_eq!(triangle_forces(&p, &x, u), none, "{hg:?}");
+            let ue = [u[0], u[1], u[2], u[2]];
+            let out = evaluate(&p, &x, &ue, &ue, &Dissipation::default(), 1e-7);
+            assert_eq!((out.hourglass_stored, out.hourglass_work), (0.0, 0.0));
+        }
+        // The forces balance and are those of the constant stress: f_a = -A t sigma (b_a, c_a).
+        let sum = [0, 1].map(|k| none.iter().map(|f| f[k]).sum::<f64>());
+        assert!(sum[0].abs() < 1e-6 && sum[1].abs() < 1e-6, "{sum:?}");
+        // Its corner check sees the one real corner set, and it reads as 2 A / A0 = 2 at rest.
+        let zero = [[0.0; 2]; 4];
+        let out = evaluate(
+            &elastic(0.3, HourglassForm::Stiffness),
+            &x,
+            &zero,
+            &zero,
+            &Dissipation::default(),
+            0.0,
+        );
+        assert!((out.min_corner - 2.0).abs() < 1e-12, "{}", out.min_corner);
+    }
+
+    /// Largest eigenvalue of the symmetric positive semi-definite `k` (power iteration).
+    fn largest_eigenvalue(k: &[[f64; 6]; 6]) -> f64 {
+        let mut v = [1.0, 0.3, -0.7, 0.2, 0.5, -0.9];
+        let mut lambda = 0.0;
+        for _ in 0..5000 {
+            let w: [f64; 6] = std::array::from_fn(|i| (0..6).map(|j| k[i][j] * v[j]).sum());
+            let norm = w.iter().map(|x| x * x).sum::<f64>().sqrt();
+            lambda =
+                (0..6).map(|i| v[i] * w[i]).sum::<f64>() / v.iter().map(|x| x * x).sum::<f64>();
+            v = w.map(|x| x / norm);
+        }
+        lambda
+    }
+
+    #[test]
+    fn stable_step_of_a_triangle_is_within_its_largest_eigenfrequency() {
+        // The element bound dt = 2 / omega_max of a constant-strain triangle with lumped masses
+        // rho t A / 3, its stiffness assembled from the element's own forces: the triangle's
+        // step (TRIANGLE_LENGTH) must not exceed it, on slender, flat, right and equilateral
+        // shapes and from nu = 0 to nearly incompressible; nor be far below it (at least 0.6).
+        let shapes = [
+            [[0.0, 0.0], [1.0, 0.0], [0.5, 0.866_025_403_784_438_6]],
+            [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            [[0.0, 0.0], [1.0, 0.0], [0.5, 10.0]],
+            [[0.0, 0.0], [1.0, 0.0], [0.5, 0.05]],
+            [[0.0, 0.0], [10.0, 0.0], [0.0, 1.0]],
+            [[0.2, 0.1], [0.9, 0.3], [-0.4, 0.8]],
+        ];
+        let mut worst = (f64::INFINITY, 0.0f64);
+        for nu in [0.0, 0.2, 0.3, 0.45, 0.499] {
+            let p = elastic(nu, HourglassForm::None);
+            for t in shapes {
+                let x = collapsed(t);
+                let area = quad_geometry(&x).area;
+                let mut k = [[0.0; 6]; 6];
+                for j in 0..6 {
+                    let mut u = [[0.0; 2]; 3];
+                    u[j / 2][j % 2] = 1e-9;
+                    let f = triangle_forces(&p, &x, u);
+                    for i in 0..6 {
+                        k[i][j] = -f[i / 2][i % 2] / 1e-9 / (p.density * p.thickness * area / 3.0);
+                    }
+                }
+                let zero = [[0.0; 2]; 4];
+                let dt = evaluate(&p, &x, &zero, &zero, &Dissipation::default(), 0.0).dt;
+                let bound = 2.0 / largest_eigenvalue(&k).sqrt();
+                let r = dt / bound;
+                worst = (worst.0.min(r), worst.1.max(r));
+                assert!(
+                    r <= 1.0 + 1e-6,
+                    "nu {nu}, {t:?}: dt {dt:e} above the bound {bound:e}"
+                );
+                assert!(
+                    r >= 0.6,
+                    "nu {nu}, {t:?}: dt {dt:e} is {r} of the bound {bound:e}"
+                );
+            }
+        }
+        println!(
+            "triangle stable step / element bound: {:.3} .. {:.3}",
+            worst.0, worst.1
+        );
     }
 }

@@ -74,6 +74,85 @@ fn a_uniform_expansion_gives_the_exact_hoop_stress_and_the_masses_are_per_radian
 }
 
 #[test]
+fn triangles_of_a_mixed_gmsh_mesh_give_the_exact_hoop_stress_and_masses_per_radian() {
+    // tests/data/gmsh/mixed.msh: the unit square, 20 quads and 35 triangles, its left side on
+    // the axis. A triangle's hoop strain is taken at its centroid (weights 1/3, not the
+    // collapsed quad's 1/4), so the uniform expansion is exact on it too.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gmsh/mixed.msh");
+    let text = format!(
+        "[run]\nend_time = 1.0e-6\n[[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\n\
+         density = {RHO}\nyoungs_modulus = 2.1e11\npoisson_ratio = 0.3\n[[body]]\nname = \"disk\"\n\
+         material = \"steel\"\nformulation = \"axisymmetric\"\n\
+         mesh = {{ gmsh = {:?}, group = \"square\" }}\n",
+        path.to_string_lossy()
+    );
+    let (_, model, _) = build(&text);
+    let tris = model
+        .quads
+        .iter()
+        .filter(|q| ricochet::step::element::is_triangle(q))
+        .count();
+    assert_eq!((model.element_count(), tris), (55, 35));
+    // rho * integral of r over the unit square = rho / 2.
+    let total: f64 = model.mass.iter().sum();
+    assert!((total - RHO / 2.0).abs() < 1e-12 * RHO, "{total}");
+    let (er, ez) = (1.0e-4, -3.0e-4);
+    let u: Vec<[f64; 2]> = model
+        .position
+        .iter()
+        .map(|p| [er * p[0], ez * p[1]])
+        .collect();
+    let (e, nu) = (2.1e11, 0.3);
+    let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    let mu = e / (2.0 * (1.0 + nu));
+    let tr = 2.0 * er + ez;
+    let want = [
+        lambda * tr + 2.0 * mu * er,
+        lambda * tr + 2.0 * mu * ez,
+        0.0,
+        lambda * tr + 2.0 * mu * er,
+    ];
+    // The strain energy per radian of the triangles: w times the integral of r over them,
+    // A (r_a + r_b + r_c) / 3 each, which their one point gives exactly at the centroid only.
+    let w = 0.5 * (want[0] * er + want[1] * ez + want[3] * er);
+    let (mut energy, mut exact) = (0.0, 0.0);
+    for el in 0..model.element_count() {
+        let q = model.quads[el];
+        let out = ricochet::step::element::evaluate_with(
+            model.params(el),
+            &model.geometry(el),
+            &model.corners[el],
+            &q.map(|i| u[i as usize]),
+            &[[0.0; 2]; 4],
+            &ricochet::step::element::Dissipation::default(),
+            0.0,
+        );
+        if ricochet::step::element::is_triangle(&q) {
+            let x = q.map(|i| model.position[i as usize]);
+            let area = 0.5
+                * ((x[1][0] - x[0][0]) * (x[2][1] - x[0][1])
+                    - (x[2][0] - x[0][0]) * (x[1][1] - x[0][1]));
+            energy += out.strain_energy;
+            exact += w * area * (x[0][0] + x[1][0] + x[2][0]) / 3.0;
+        }
+        let s = element_fields(&model, &u, el).stress;
+        for i in 0..4 {
+            assert!(
+                (s[i] - want[i]).abs() < 1e-10 * want[0].abs(),
+                "element {el} ({:?}), component {i}: {} against {}",
+                model.quads[el],
+                s[i],
+                want[i]
+            );
+        }
+    }
+    assert!(
+        (energy - exact).abs() < 1e-10 * exact,
+        "strain energy per radian of the triangles {energy:e} against {exact:e}"
+    );
+}
+
+#[test]
 fn nodes_on_the_axis_are_held_at_zero_radial_velocity() {
     let (_, model, _) = build(&scene(0.0, "initial_velocity = [5.0, -3.0]"));
     let on_axis: Vec<usize> = (0..model.node_count())

@@ -457,6 +457,50 @@ fn non_convex_explicit_mesh() {
 }
 
 #[test]
+fn explicit_triangles_are_read_and_bad_ones_named() {
+    let mesh = |quads: &str| {
+        variant(
+            "{ rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }",
+            &format!(
+                "{{ nodes = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [2.0, 0.5]], quads = {quads} }}"
+            ),
+        )
+    };
+    // A quad and a triangle, the triangle written with three nodes or collapsed.
+    expect_accepted(
+        "explicit_triangle",
+        &mesh("[[0, 1, 2, 3], [1, 4, 2]]"),
+        true,
+    );
+    expect_accepted(
+        "explicit_collapsed_triangle",
+        &mesh("[[0, 1, 2, 3], [1, 4, 2, 2]]"),
+        false,
+    );
+    expect_rejected(
+        "clockwise_triangle",
+        &variant(
+            "{ rectangle = { origin = [0.0, 0.0], size = [0.1, 0.05], cells = [4, 2] } }",
+            "{ nodes = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], quads = [[0, 2, 1]] }",
+        ),
+        &["body[0].mesh", "triangle 0 = [0, 2, 1, 1]", "area -5e-1"],
+    );
+    expect_rejected(
+        "triangle_repeated_node",
+        &mesh("[[0, 1, 2, 3], [1, 1, 4]]"),
+        &["body[0].mesh", "element 1 = [1, 1, 4, 4]", "same node"],
+    );
+    expect_rejected(
+        "element_of_five_nodes",
+        &mesh("[[0, 1, 2, 3, 4]]"),
+        &[
+            "quads = [[0, 1, 2, 3, 4]]",
+            "3 node indices (a triangle) or 4 (a quad)",
+        ],
+    );
+}
+
+#[test]
 fn explicit_mesh_index_out_of_range() {
     expect_rejected(
         "index_mesh",
@@ -1245,10 +1289,16 @@ fn bad_gmsh_meshes_name_the_file_the_group_and_the_problem() {
             "64 x Qua9 (Gmsh type 10)",
         ],
     );
-    expect_rejected(
+    // Triangles are read (as collapsed quads), alone or among quads.
+    expect_accepted(
         "gmsh_triangles",
         &gmsh_scene(&test_mesh("square_triangles.msh"), "square"),
-        &[key, "32 x Tri3 (Gmsh type 2)", "RecombineAll"],
+        true,
+    );
+    expect_accepted(
+        "gmsh_mixed",
+        &gmsh_scene(&test_mesh("mixed.msh"), "square"),
+        true,
     );
     // An inverted (bow-tie) element: the first quad's second and third nodes swapped.
     let text = std::fs::read_to_string(&square).expect("square.msh");

@@ -124,6 +124,49 @@ fn shipped_meshes_have_the_counts_gmsh_wrote_ascii_and_binary_alike() {
 }
 
 #[test]
+fn a_quad_dominant_mesh_reads_its_quads_and_triangles_ascii_and_binary_alike() {
+    // Gmsh 4.15, meshing tests/data/gmsh/mixed.geo: surface 1 (recombined) 20 quads and 2
+    // triangles, surface 2 33 triangles, 51 nodes, all in physical surface `square`.
+    let ascii = surface(&test_mesh("mixed.msh"), "square");
+    let binary = surface(&test_mesh("mixed_binary.msh"), "square");
+    for m in [&ascii, &binary] {
+        assert_eq!(
+            (m.quads.len() - m.triangles(), m.triangles(), m.nodes.len()),
+            (20, 35, 51)
+        );
+    }
+    assert!(ascii.quads == binary.quads && ascii.element_tags == binary.element_tags);
+    assert!(ascii.node_tags == binary.node_tags);
+    // Triangles are collapsed quads [a, b, c, c] with three distinct nodes; every element is
+    // counter-clockwise with positive area and together they fill the square.
+    let mut area = 0.0;
+    for q in &ascii.quads {
+        let tri = q[2] == q[3];
+        if tri {
+            assert!(q[0] != q[1] && q[1] != q[2] && q[0] != q[2], "{q:?}");
+        }
+        let c = q.map(|n| ascii.nodes[n as usize]);
+        let a = 0.5
+            * ((c[2][0] - c[0][0]) * (c[3][1] - c[1][1])
+                - (c[3][0] - c[1][0]) * (c[2][1] - c[0][1]));
+        assert!(a > 0.0, "{q:?} has area {a}");
+        area += a;
+    }
+    assert!((area - 1.0).abs() < 1e-12, "areas sum to {area}");
+    // Written clockwise, its triangles are turned as its quads are.
+    let text = std::fs::read_to_string(test_mesh("mixed.msh")).expect("mixed.msh");
+    let flipped = edit_elements(&text, 2, |n| {
+        n.iter().rev().map(|s| s.to_string()).collect()
+    });
+    let flipped = edit_elements(&flipped, 3, |n| {
+        n.iter().rev().map(|s| s.to_string()).collect()
+    });
+    let m = read_surface(flipped.as_bytes(), "square").expect("flipped mesh");
+    assert_eq!(m.reoriented, 55);
+    assert_eq!(m.triangles(), 35);
+}
+
+#[test]
 fn clockwise_quads_are_turned_and_counted() {
     // The same square with every quad written clockwise (node order reversed in the file).
     let text = std::fs::read_to_string(test_mesh("square.msh")).expect("square.msh");
@@ -149,11 +192,22 @@ pub fn reverse_quads(text: &str) -> String {
 
 /// `text` with each quad's node tags (in the Elements section's 4-node-quad blocks) replaced by
 /// `f` of them.
-pub fn edit_quads(text: &str, mut f: impl FnMut(&[&str]) -> Vec<String>) -> String {
+pub fn edit_quads(text: &str, f: impl FnMut(&[&str]) -> Vec<String>) -> String {
+    edit_elements(text, 3, f)
+}
+
+/// `text` with the node tags of each element of Gmsh type `kind` (3: 4-node quad, 2: 3-node
+/// triangle) replaced by `f` of them.
+pub fn edit_elements(text: &str, kind: u32, mut f: impl FnMut(&[&str]) -> Vec<String>) -> String {
+    let nodes = match kind {
+        2 => 3,
+        3 => 4,
+        _ => panic!("element type {kind}"),
+    };
     let mut out = String::new();
     let mut in_elements = false;
     let mut left_in_block = 0usize;
-    let mut quad_block = false;
+    let mut kind_block = false;
     let mut header_seen = false;
     for line in text.lines() {
         let mut l = line.to_string();
@@ -168,11 +222,11 @@ pub fn edit_quads(text: &str, mut f: impl FnMut(&[&str]) -> Vec<String>) -> Stri
                 header_seen = true;
             } else if left_in_block == 0 {
                 // Block header: entity dim, entity tag, element type, count.
-                quad_block = t[2] == "3";
+                kind_block = t[2] == kind.to_string();
                 left_in_block = t[3].parse().expect("count");
             } else {
-                if quad_block {
-                    let nodes: Vec<String> = f(&t[1..5]);
+                if kind_block {
+                    let nodes: Vec<String> = f(&t[1..1 + nodes]);
                     l = format!("{} {} ", t[0], nodes.join(" "));
                 }
                 left_in_block -= 1;

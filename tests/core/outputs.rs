@@ -107,6 +107,47 @@ fn run_writes_history_summary_and_fields() {
 }
 
 #[test]
+fn triangles_are_written_as_vtk_triangle_cells() {
+    // tests/data/gmsh/mixed.msh: 20 quads and 35 triangles on 51 nodes, stretched; each
+    // encoding read back by meshio with its quads and triangles.
+    let base = tmp_dir("triangle-fields");
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gmsh/mixed.msh");
+    for format in ["binary", "ascii"] {
+        let scene = base.join(format!("{format}.toml"));
+        std::fs::write(
+            &scene,
+            format!(
+                "[run]\nend_time = 1.0e-4\nfield_interval = 5.0e-5\nfield_format = \"{format}\"\n\
+                 [[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\ndensity = 7850.0\n\
+                 youngs_modulus = 2.1e11\npoisson_ratio = 0.3\n[[body]]\nname = \"square\"\n\
+                 material = \"steel\"\nmesh = {{ gmsh = {:?}, group = \"square\" }}\n\
+                 velocity_gradient = [[100.0, 20.0], [0.0, -60.0]]\n",
+                mesh.to_string_lossy()
+            ),
+        )
+        .unwrap();
+        let out = base.join(format);
+        let o = run_cpu(&scene, &out, &[]);
+        assert_eq!(o.status.code(), Some(0), "{o:?}");
+        let precision = if format == "binary" {
+            F32_ROUNDING
+        } else {
+            F64_ROUNDING
+        };
+        check_vtu_cells_with_meshio(
+            &out,
+            3,
+            51,
+            55,
+            &["quad", "triangle"],
+            [0.0, 0.0, 1.0, 1.0],
+            precision,
+        );
+    }
+    let _ = std::fs::remove_dir_all(&base);
+}
+
+#[test]
 fn binary_fields_hold_the_ascii_values_in_a_quarter_of_the_bytes() {
     // The same run written in the three encodings: `binary64` holds every ASCII value bit for bit
     // (the ASCII numbers are shortest round-trip forms), `binary` every value rounded to single
@@ -260,6 +301,19 @@ fn check_vtu_with_meshio(
     bbox: [f64; 4],
     precision: f64,
 ) {
+    check_vtu_cells_with_meshio(dir, files, points, cells, &["quad"], bbox, precision);
+}
+
+/// [`check_vtu_with_meshio`] with the VTK cell types expected (meshio's names, sorted).
+fn check_vtu_cells_with_meshio(
+    dir: &Path,
+    files: usize,
+    points: u64,
+    cells: u64,
+    types: &[&str],
+    bbox: [f64; 4],
+    precision: f64,
+) {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/read_vtu.py");
     let out = Command::new("python3").arg(&script).arg(dir).output();
     let skip = |why: String| {
@@ -298,7 +352,7 @@ fn check_vtu_with_meshio(
     for v in &lines[1..] {
         assert_eq!(v["points"], points, "{v}");
         assert_eq!(v["cells"], cells, "{v}");
-        assert_eq!(v["cell_types"], serde_json::json!(["quad"]), "{v}");
+        assert_eq!(v["cell_types"], serde_json::json!(types), "{v}");
         for (name, n) in [("displacement", 3), ("velocity", 3)] {
             assert_eq!(v["point_data"][name], n, "{v}");
         }
@@ -324,7 +378,7 @@ fn check_vtu_with_meshio(
         );
         assert_eq!(v["max_abs_z"].as_f64().unwrap(), 0.0, "{v}");
     }
-    println!("meshio read {files} VTU files ({points} points, {cells} quads each)");
+    println!("meshio read {files} VTU files ({points} points, {cells} cells of {types:?} each)");
 }
 
 #[test]
