@@ -125,10 +125,10 @@ fn largest_mesh(scene: &Scene) -> (String, String) {
             (format!("body[{bi}].mesh.disk.cells"), format!("{cells}"))
         }
         Some(crate::scene::MeshSpec::Gmsh { .. }) => {
-            (format!("body[{bi}].mesh.gmsh"), format!("{n} quads"))
+            (format!("body[{bi}].mesh.gmsh"), format!("{n} elements"))
         }
         Some(crate::scene::MeshSpec::Explicit { .. }) | None => {
-            (format!("body[{bi}].mesh.quads"), format!("{n} quads"))
+            (format!("body[{bi}].mesh.quads"), format!("{n} elements"))
         }
     }
 }

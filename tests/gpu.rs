@@ -213,6 +213,262 @@ fn element_kernel_matches_cpu_reference_on_random_states() {
     }
 }
 
+/// A scene of the mixed quad/triangle square of `tests/data/gmsh/mixed.msh` (20 quads, 35
+/// triangles), with `body` lines added to its body.
+fn mixed_mesh_scene(model: &str, formulation: &str, run: &str, body: &str) -> String {
+    let mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gmsh/mixed.msh");
+    format!(
+        "[run]\nend_time = 2.0e-4\n{run}\n[[material]]\nname = \"steel\"\nmodel = \"{model}\"\n\
+         density = 7850.0\nyoungs_modulus = 2.1e11\npoisson_ratio = 0.3\n[[body]]\nname = \"square\"\n\
+         material = \"steel\"\nformulation = \"{formulation}\"\n{}\
+         mesh = {{ gmsh = {:?}, group = \"square\" }}\n{body}\n",
+        if formulation == "axisymmetric" {
+            ""
+        } else {
+            "thickness = 0.02\n"
+        },
+        mesh.to_string_lossy()
+    )
+}
+
+/// The constant-strain patch test on the GPU element kernel, on the mixed quad/triangle mesh
+/// that Gmsh made: u = A X + shift uploaded, the element stage run once. Each element's stress
+/// recovered from its nodal forces (sum_a f_a X_a^T = -A0 t P, since the gradients reproduce
+/// linear fields), the interior nodes' force and the boundary nodes' consistent traction, all
+/// to 1e-5 of the stress (f32); and the stable step as on the CPU.
+#[test]
+fn element_kernel_passes_the_patch_test_on_the_mixed_gmsh_mesh() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let grad = [[1.0e-3, 4.0e-4], [-2.0e-4, -5.0e-4]];
+    let shift = [3.0e-4, -7.0e-4];
+    let (e_mod, nu, t) = (2.1e11f64, 0.3f64, 0.02);
+    let mut worst = (0.0f64, 0.0f64, 0.0f64);
+    for (formulation, hourglass) in [
+        ("plane_strain", "stiffness"),
+        ("plane_stress", "viscous"),
+        ("plane_strain", "none"),
+    ] {
+        let text = mixed_mesh_scene(
+            "linear_elastic",
+            formulation,
+            "",
+            &format!("hourglass = {{ form = \"{hourglass}\", coefficient = 0.1 }}"),
+        );
+        let (scene, model, plan) = load(&text, "mixed_patch.toml");
+        let tris = model
+            .quads
+            .iter()
+            .filter(|q| ricochet::step::element::is_triangle(q))
+            .count();
+        assert_eq!((model.element_count(), tris), (55, 35));
+        let mut gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+        let u: Vec<[f64; 2]> = model
+            .position
+            .iter()
+            .map(|x| {
+                [
+                    grad[0][0] * x[0] + grad[0][1] * x[1] + shift[0],
+                    grad[1][0] * x[0] + grad[1][1] * x[1] + shift[1],
+                ]
+            })
+            .collect();
+        let (forces, dts) = gpu
+            .element_stage(&u, &vec![[0.0; 2]; model.node_count()])
+            .expect("element stage");
+        // Hooke's stress of the field (plane strain or plane stress).
+        let (exx, eyy, exy) = (grad[0][0], grad[1][1], 0.5 * (grad[0][1] + grad[1][0]));
+        let (sxx, syy) = if formulation == "plane_strain" {
+            let k = e_mod / ((1.0 + nu) * (1.0 - 2.0 * nu));
+            (
+                k * ((1.0 - nu) * exx + nu * eyy),
+                k * (nu * exx + (1.0 - nu) * eyy),
+            )
+        } else {
+            let k = e_mod / (1.0 - nu * nu);
+            (k * (exx + nu * eyy), k * (nu * exx + eyy))
+        };
+        let sxy = e_mod / (1.0 + nu) * exy;
+        let sigma = [[sxx, sxy], [sxy, syy]];
+        let scale = sxx.abs().max(syy.abs()).max(sxy.abs());
+        let mut node_force = vec![[0.0f64; 2]; model.node_count()];
+        for e in 0..model.element_count() {
+            let q = model.quads[e];
+            let x = q.map(|i| model.position[i as usize]);
+            let g = model.geometry(e);
+            let mut p = [[0.0f64; 2]; 2];
+            for a in 0..4 {
+                for i in 0..2 {
+                    for j in 0..2 {
+                        p[i][j] -= forces[e][a][i] * x[a][j] / (g.area * t);
+                    }
+                    node_force[q[a] as usize][i] += forces[e][a][i];
+                }
+            }
+            for i in 0..2 {
+                for j in 0..2 {
+                    worst.0 = worst.0.max((p[i][j] - sigma[i][j]).abs() / scale);
+                }
+            }
+            let cpu = evaluate_state(
+                model.params(e),
+                &g,
+                &model.corners[e],
+                &q.map(|i| u[i as usize]),
+                &[[0.0; 2]; 4],
+                &Dissipation::default(),
+                0.0,
+                &PlasticState::VIRGIN,
+            );
+            assert!(
+                ((dts[e] - cpu.dt) / cpu.dt).abs() < 1e-6,
+                "element {e} ({q:?}): dt {} against {}",
+                dts[e],
+                cpu.dt
+            );
+        }
+        // Boundary edges (used by one element; a triangle's collapsed side is none): the
+        // consistent traction t sigma n, half to each end; interior nodes get nothing.
+        let mut count = std::collections::HashMap::new();
+        for q in &model.quads {
+            for a in 0..4 {
+                let (i, j) = (q[a], q[(a + 1) % 4]);
+                if i != j {
+                    *count.entry((i.min(j), i.max(j))).or_insert(0) += 1;
+                }
+            }
+        }
+        let mut expected = vec![[0.0f64; 2]; model.node_count()];
+        for q in &model.quads {
+            for a in 0..4 {
+                let (i, j) = (q[a], q[(a + 1) % 4]);
+                if i == j || count[&(i.min(j), i.max(j))] != 1 {
+                    continue;
+                }
+                let (pi, pj) = (model.position[i as usize], model.position[j as usize]);
+                let n = [pj[1] - pi[1], -(pj[0] - pi[0])];
+                for k in [i, j] {
+                    for c in 0..2 {
+                        expected[k as usize][c] -=
+                            0.5 * t * (sigma[c][0] * n[0] + sigma[c][1] * n[1]);
+                    }
+                }
+            }
+        }
+        let f_scale = scale * t * 1.0;
+        for (i, (f, w)) in node_force.iter().zip(&expected).enumerate() {
+            let d = (f[0] - w[0]).hypot(f[1] - w[1]) / f_scale;
+            if w == &[0.0, 0.0] {
+                worst.2 = worst.2.max(d);
+            } else {
+                worst.1 = worst.1.max(d);
+            }
+            assert!(
+                d < 1e-5,
+                "{formulation}, {hourglass}: node {i} force {f:?} against {w:?}"
+            );
+        }
+        assert!(
+            worst.0 < 1e-5,
+            "{formulation}, {hourglass}: stress error {:e}",
+            worst.0
+        );
+    }
+    eprintln!(
+        "GPU patch test on mixed.msh: stress error {:.2e}, boundary force error {:.2e}, interior force {:.2e} of sigma t L",
+        worst.0, worst.1, worst.2
+    );
+}
+
+/// The element kernel against the CPU reference on the quads and triangles of the mixed mesh,
+/// from random states, in plane strain with bulk viscosity and viscous hourglass control and in
+/// the axisymmetric formulation (a triangle's centroid weights), neo-Hookean.
+#[test]
+fn element_kernel_matches_cpu_reference_on_triangles() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let mut rng = Lcg(11);
+    for (formulation, x0) in [("plane_strain", 0.0), ("axisymmetric", 0.0)] {
+        let text = mixed_mesh_scene(
+            "neo_hookean",
+            formulation,
+            "bulk_viscosity = { linear = 0.06, quadratic = 1.5 }",
+            "hourglass = { form = \"viscous\", coefficient = 0.1 }",
+        );
+        let (scene, model, plan) = load(&text, "mixed_kernel.toml");
+        let mut gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+        let h = 0.2;
+        let mut worst = 0.0f64;
+        for (amp_u, amp_v) in [(1e-3 * h, 0.0), (1e-3 * h, 5.0), (3e-2 * h, 2.0)] {
+            let u: Vec<[f64; 2]> = (0..model.node_count())
+                .map(|i| {
+                    // No radial displacement on the axis (x = 0) of the axisymmetric body.
+                    let r = if model.position[i][0] > x0 { 1.0 } else { 0.0 };
+                    [r * amp_u * rng.next(), amp_u * rng.next()]
+                })
+                .collect();
+            let v: Vec<[f64; 2]> = (0..model.node_count())
+                .map(|i| {
+                    let r = if model.position[i][0] > x0 { 1.0 } else { 0.0 };
+                    [r * amp_v * rng.next(), amp_v * rng.next()]
+                })
+                .collect();
+            let (forces, dts) = gpu.element_stage(&u, &v).expect("element stage");
+            for e in 0..model.element_count() {
+                let q = model.quads[e];
+                let cpu = evaluate_state(
+                    model.params(e),
+                    &model.geometry(e),
+                    &model.corners[e],
+                    &q.map(|i| u[i as usize]),
+                    &q.map(|i| v[i as usize]),
+                    &Dissipation::default(),
+                    0.0,
+                    &PlasticState::VIRGIN,
+                );
+                let scale = cpu
+                    .force
+                    .iter()
+                    .map(|f| f[0].abs().max(f[1].abs()))
+                    .fold(0.0f64, f64::max)
+                    .max(1e-30);
+                for a in 0..4 {
+                    for c in 0..2 {
+                        worst = worst.max((forces[e][a][c] - cpu.force[a][c]).abs() / scale);
+                    }
+                }
+                assert!(
+                    ((dts[e] - cpu.dt) / cpu.dt).abs() < 1e-5,
+                    "{formulation}, element {e}: dt {} vs {}",
+                    dts[e],
+                    cpu.dt
+                );
+            }
+        }
+        eprintln!("{formulation} mixed mesh: worst relative force difference {worst:.2e}");
+        assert!(
+            worst < 2e-3,
+            "{formulation}: worst relative force difference {worst:e}"
+        );
+    }
+}
+
+/// A whole run on the mixed quad/triangle mesh, as on the CPU: the stretched and sheared square
+/// with bulk viscosity and stiffness hourglass control on its quads.
+#[test]
+fn parity_mixed_quad_triangle_mesh() {
+    parity(
+        "mixed_mesh",
+        &mixed_mesh_scene(
+            "neo_hookean",
+            "plane_strain",
+            "bulk_viscosity = { linear = 0.06, quadratic = 1.5 }",
+            "velocity_gradient = [[100.0, 20.0], [0.0, -60.0]]\nhourglass = { form = \"stiffness\", coefficient = 0.1 }",
+        )
+        .replace("end_time = 2.0e-4", "end_time = 2.0e-3"),
+    );
+}
+
 /// Runs `text` on both backends and returns (cpu samples, gpu samples, cpu u, gpu u).
 #[allow(clippy::type_complexity)]
 fn both(

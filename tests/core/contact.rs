@@ -361,6 +361,16 @@ fn gmsh_disk_on_a_rigid_wall_passes_the_generated_disks_bounds() {
     check_disk_on_wall(&disk_gmsh_text(case.0), "disk_wall_gmsh", case);
 }
 
+#[test]
+fn triangle_disk_on_a_rigid_wall_passes_the_generated_disks_bounds() {
+    // The same case with the disk meshed by Gmsh in 3-node triangles only
+    // (tests/data/gmsh/disk_triangles.msh, 6072 triangles): triangles in a contact surface.
+    let case = DISK_CASES[0];
+    let text = disk_triangles_text(case.0);
+    assert!(text.contains("disk_triangles.msh"));
+    check_disk_on_wall(&text, "disk_wall_triangles", case);
+}
+
 /// Two stacked blocks whose meshes overlap by `overlap` (non-matching: 4 and 3 cells along x)
 /// and a wall the lower block's bottom starts `overlap` behind, at rest.
 pub(crate) fn overlapping_blocks(overlap: f64, method: &str) -> String {

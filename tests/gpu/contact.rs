@@ -267,6 +267,16 @@ fn gpu_gmsh_disk_on_a_rigid_wall_passes_the_generated_disks_bounds() {
     gpu_disk_on_wall(&ctx, &disk_gmsh_text(case.0), "disk_gmsh", case);
 }
 
+/// The disk meshed in triangles only (`tests/data/gmsh/disk_triangles.msh`): triangles in the
+/// element kernel and in the contact surface on the device.
+#[test]
+fn gpu_triangle_disk_on_a_rigid_wall_passes_the_generated_disks_bounds() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let case = DISK_CASES[0];
+    gpu_disk_on_wall(&ctx, &disk_triangles_text(case.0), "disk_triangles", case);
+}
+
 /// The Gmsh notched plate (bodies read from a mesh file, ends clamped by a named curve) with its
 /// contact limited to the named faces, on the device as on the CPU.
 #[test]

@@ -207,6 +207,18 @@ pub fn disk_gmsh_text(v0: f64) -> String {
     )
 }
 
+/// The disk on the wall of [`disk_gmsh_text`] meshed by Gmsh into triangles only
+/// (`tests/data/gmsh/disk_triangles.msh`, from its `.geo` beside it).
+pub fn disk_triangles_text(v0: f64) -> String {
+    disk_gmsh_text(v0).replace(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/assets/gmsh/disk.msh"),
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/gmsh/disk_triangles.msh"
+        ),
+    )
+}
+
 /// Contact time, peak force (N/m), centre-of-mass restitution and the largest total-energy drift
 /// relative to E0 = M v0^2 / 2 of a disk-on-wall run's samples.
 pub fn disk_metrics(samples: &[Sample], mass: f64, v0: f64) -> (f64, f64, f64, f64) {
