@@ -24,8 +24,8 @@ struct Params {
     loads: u32,           // 1: pressure or damping work is summed (sample_src after the constraints)
     plastic: u32,         // 1: J2 plastic work is summed (sample_src after the loads) into word 9
     inst_groups: u32,     // workgroups of sum_instances (the second level of the sums; 0: fused)
-    _p0: u32,
-    _p1: u32,
+    gravity_x: f32,       // run.gravity (m/s^2; the loads variant of the node stage applies it)
+    gravity_y: f32,
     _p2: u32,
 }
 

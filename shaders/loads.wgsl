@@ -1,4 +1,5 @@
-// Pressure loads and mass damping (scenes with `[[pressure]]` or `run.mass_damping` only).
+// Pressure loads, mass damping and gravity (scenes with `[[pressure]]`, `run.mass_damping` or
+// `run.gravity` only; gravity's work is summed with the pressure's, as external work).
 // pressure_force, one thread per (load, node) entry, before the node stage: the entry's force
 //   p(t_n) F_per_Pa into its slot past the element slots, which the node stage gathers after the
 //   node's element slots (in the CPU's order: elements, then the loads in scene order).
@@ -71,6 +72,8 @@ fn load_work(@builtin(global_invocation_id) gid: vec3<u32>) {
             fp += elem_force[s];
         }
     }
+    // Gravity's force m g, an external force like the pressure's.
+    fp += vec2<f32>(params.gravity_x, params.gravity_y) / inv_mass[i];
     // The pressure impulse: dt_n F_n (dt^{1/2} F_0 on the first step, with v^{-1/2} as above).
     let j = select(ctrl.dt_node, ctrl.dt_next, first) * fp;
     let pb = 0.5 * dot(j, vm);

@@ -41,6 +41,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // Pressure forces arrive through slots past the elements' (see loads.wgsl). Mass damping:
     // (1 + c) m v+ = (1 - c) m v- + dt_n f, c = alpha dt_n / 2 (implicit in v, stable for any alpha).
     v_old[i] = vm;
+    // Gravity: the force m g (loads.wgsl sums its work with the pressure's).
+    f += vec2<f32>(params.gravity_x, params.gravity_y) / inv_mass[i];
     let c = ctrl.damp_c;
     let vp = ((1.0 - c) / (1.0 + c)) * vm + (ctrl.dt_node * inv_mass[i] / (1.0 + c)) * f;
 //#else

@@ -134,6 +134,8 @@ pub struct Model {
     pub pressures: Vec<PressureLoad>,
     /// Mass-proportional damping coefficient alpha (1/s), 0 for none.
     pub mass_damping: f64,
+    /// Gravity (m/s^2), [0, 0] for none.
+    pub gravity: [f64; 2],
 }
 
 impl Model {
@@ -162,6 +164,7 @@ impl Model {
             initial_overlaps: Vec::new(),
             pressures: Vec::new(),
             mass_damping: scene.run.mass_damping,
+            gravity: scene.run.gravity,
         };
         let any_axi = scene
             .bodies

@@ -25,6 +25,8 @@ pub enum Stage {
     StableStep,
     /// Mass-proportional damping in the velocity update, and its work (`run.mass_damping` > 0).
     MassDamping,
+    /// Gravity: the body force m g on every node, and its work (`run.gravity` not zero).
+    Gravity,
     /// Central-difference velocity and displacement update.
     NodeUpdate,
     /// Prescribed velocities.
@@ -49,6 +51,7 @@ impl Stage {
             Stage::Pressure => "pressure",
             Stage::StableStep => "stable_step",
             Stage::MassDamping => "mass_damping",
+            Stage::Gravity => "gravity",
             Stage::NodeUpdate => "node_update",
             Stage::VelocityBoundaries => "velocity_boundaries",
             Stage::Contact => "contact",
@@ -116,6 +119,9 @@ impl Plan {
         }
         if model.mass_damping > 0.0 {
             stages.push(Stage::MassDamping);
+        }
+        if model.gravity != [0.0; 2] {
+            stages.push(Stage::Gravity);
         }
         stages.push(Stage::NodeUpdate);
         if !model.constraints.is_empty() {

@@ -64,7 +64,7 @@ mod fixed {
                         [a, b, c, e] => Ok([a, b, c, e]),
                         _ => Err(D::Error::invalid_length(
                             r.len(),
-                            &"3 node indices (a triangle) or 4 (a quad)",
+                            &"exactly 3 node indices (a triangle) or 4 (a quad)",
                         )),
                     })
                     .collect()
@@ -189,6 +189,7 @@ struct RawRun {
     energy_error_limit: Option<f64>,
     bulk_viscosity: Option<RawBulk>,
     mass_damping: Option<f64>,
+    gravity: Option<toml::Value>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -678,6 +679,8 @@ pub struct RunSettings {
     /// Mass-proportional damping coefficient alpha (1/s): a force -alpha m v on every node
     /// (0: none).
     pub mass_damping: f64,
+    /// Gravity (m/s^2): a body force m g on every node ([0, 0]: none).
+    pub gravity: [f64; 2],
 }
 
 /// A validated scene.
@@ -1352,6 +1355,29 @@ impl Validator<'_> {
             Some(a) => self.non_negative("run.mass_damping", a)?,
             None => 0.0,
         };
+        let gravity = match &r.gravity {
+            None => [0.0; 2],
+            Some(v) => {
+                let pair = v.as_array().and_then(|a| match a.as_slice() {
+                    [x, y] => Some([
+                        x.as_float().or(x.as_integer().map(|i| i as f64))?,
+                        y.as_float().or(y.as_integer().map(|i| i as f64))?,
+                    ]),
+                    _ => None,
+                });
+                let Some(g) = pair else {
+                    return Err(self.invalid(
+                        "run.gravity",
+                        v.to_string(),
+                        "must be a 2-vector [gx, gy] in m/s^2, e.g. [0.0, -9.81]",
+                    ));
+                };
+                if !(g[0].is_finite() && g[1].is_finite()) {
+                    return Err(self.invalid("run.gravity", format!("{g:?}"), "must be finite"));
+                }
+                g
+            }
+        };
         Ok(RunSettings {
             end_time,
             time_step_scale,
@@ -1364,6 +1390,7 @@ impl Validator<'_> {
             bulk_linear,
             bulk_quadratic,
             mass_damping,
+            gravity,
         })
     }
 

@@ -11,6 +11,7 @@
 //! - [`wave`]: 1D waves in a rod strip against the dispersion table of `REFERENCES.md` section 2;
 //! - [`energy`]: the energy audit of a free-vibrating block (conservative and dissipative), of a
 //!   pressure load and of mass damping;
+//! - [`gravity`]: gravity as a body force: exact free fall and its work, a block resting on a wall;
 //! - [`patch_contact`]: the contact patch test (two blocks, non-matching meshes, pressure load,
 //!   mass damping): two-pass Lagrange exact, one pass failing as it should;
 //! - [`general_contact`]: contact groups (`bodies = "all"`, lists) and self-contact: the scene
@@ -54,6 +55,8 @@ mod fuzz;
 mod general_contact;
 #[path = "core/gmsh.rs"]
 mod gmsh;
+#[path = "core/gravity.rs"]
+mod gravity;
 #[path = "core/hourglass.rs"]
 mod hourglass;
 #[path = "core/load_curve.rs"]

@@ -656,6 +656,51 @@ fn parity_with_the_multi_level_reductions() {
 #[path = "shared/load_curve_scene.rs"]
 mod load_curve_scene;
 
+#[path = "shared/gravity_scene.rs"]
+mod gravity_scene;
+
+/// Gravity on the device (the `loads` variant of the node stage, its work with the pressure's):
+/// the free fall as on the CPU; the block resting on a rigid wall held by its weight (its
+/// displacements, a few nm, are too small for the parity's relative bound in f32).
+#[test]
+fn gravity_on_the_device() {
+    use gravity_scene::*;
+    parity("free_fall", &block_scene(0.05, 9.0e-4, 3.0e-7, 50, false));
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let (sc, sg, _, ug, _, _) = both(
+        ctx,
+        &block_scene(0.0, 2.0e-3, 0.0, 2000, true),
+        "resting",
+        None,
+    );
+    let (_, model, _) = load(&block_scene(0.0, 2.0e-3, 0.0, 2000, true), "resting.toml");
+    let weight = model.bodies[0].mass * G;
+    for (name, rows) in [("cpu", &sc), ("gpu", &sg)] {
+        let mean = rows.iter().map(|s| s.contacts[0].force[1]).sum::<f64>() / rows.len() as f64;
+        let moving = rows
+            .iter()
+            .map(|s| s.body_velocity[0][1].abs())
+            .fold(0.0f64, f64::max);
+        eprintln!(
+            "resting block ({name}): mean wall force {:.5} of m g, largest |v| {moving:.2e} m/s",
+            mean / weight
+        );
+        assert!(
+            (mean / weight - 1.0).abs() < 0.01,
+            "{name}: {mean} against {weight}"
+        );
+        assert!(moving < 1e-3 * G * 2.0e-3, "{name}: {moving}");
+    }
+    let sink = ug
+        .iter()
+        .zip(&model.position)
+        .filter(|(_, p)| p[1] == 0.0)
+        .map(|(u, _)| u[1])
+        .fold(0.0f64, f64::min);
+    assert!(sink > -1e-9, "gpu: bottom node at {sink:e}");
+}
+
 /// Load curves on the device: the pulled bar (a ramped-then-held velocity) and the same bar under
 /// a pressure curve, as on the CPU.
 #[test]

@@ -30,8 +30,8 @@ pub struct Params {
     pub loads: u32,
     pub plastic: u32,
     pub inst_groups: u32,
-    pub _p0: u32,
-    pub _p1: u32,
+    pub gravity_x: f32,
+    pub gravity_y: f32,
     pub _p2: u32,
 }
 

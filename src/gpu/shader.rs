@@ -14,7 +14,8 @@ pub struct Features {
     pub dissipation: bool,
     /// Field snapshots.
     pub fields: bool,
-    /// Pressure loads or mass damping: the node stage keeps v^{n-1/2} for their work (and damps).
+    /// Pressure loads, mass damping or gravity: the node stage keeps v^{n-1/2} for their work
+    /// (and damps, and adds m g).
     pub loads: bool,
     /// J2 plastic bodies: the element stage keeps a plastic state per element.
     pub plastic: bool,

@@ -129,7 +129,9 @@ impl GpuSolver {
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
-            loads: plan.has(Stage::Pressure) || plan.has(Stage::MassDamping),
+            loads: plan.has(Stage::Pressure)
+                || plan.has(Stage::MassDamping)
+                || plan.has(Stage::Gravity),
             plastic: model.has_plasticity(),
             axisymmetric: model
                 .bodies

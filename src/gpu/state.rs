@@ -364,6 +364,8 @@ impl GpuState {
                 .and_then(|c| c.penalty_step())
                 .map_or(0.0, |(d, _)| d as f32),
             mass_damping: model.mass_damping as f32,
+            gravity_x: model.gravity[0] as f32,
+            gravity_y: model.gravity[1] as f32,
             loads: u32::from(has_loads),
             plastic: u32::from(plastic),
             inst_groups: if fused {

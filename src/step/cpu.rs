@@ -62,6 +62,11 @@ struct CpuState {
     /// Work of the damping impulses so far (<= 0), and the part of the last step's after t_n.
     damping_work: f64,
     damping_after: f64,
+    /// Work of gravity so far, and the part of the last step's after t_n.
+    #[serde(default)]
+    gravity_work: f64,
+    #[serde(default)]
+    gravity_after: f64,
     t: f64,
     n: u64,
     dt_prev: f64,
@@ -129,6 +134,8 @@ impl CpuSolver {
             damping_v_old,
             damping_work: 0.0,
             damping_after: 0.0,
+            gravity_work: 0.0,
+            gravity_after: 0.0,
             t: 0.0,
             n: 0,
             dt_prev: 0.0,
@@ -440,6 +447,19 @@ impl CpuSolver {
             *j = [load_dt * j[0], load_dt * j[1]];
             self.s.pressure_v_old[k] = self.s.v[node as usize];
         }
+        // Gravity: the force m g on every node, and the momentum sum(m v^{n-1/2}) for its work.
+        let gravity = self.plan.has(Stage::Gravity);
+        let mut momentum_old = [0.0; 2];
+        if gravity {
+            let g = self.model.gravity;
+            for (i, f) in self.s.f.iter_mut().enumerate() {
+                let m = self.model.mass[i];
+                f[0] += m * g[0];
+                f[1] += m * g[1];
+                momentum_old[0] += m * self.s.v[i][0];
+                momentum_old[1] += m * self.s.v[i][1];
+            }
+        }
         let mut bad = None;
         // Mass damping (from the second step on: the first half step stays undamped so that the
         // start-up v^{-1/2} = 2 v_0 - v^{1/2} keeps its meaning), with the force at t_n taken as
@@ -564,6 +584,27 @@ impl CpuSolver {
             self.s.pressure_work += before + after;
             self.s.pressure_after = after;
         }
+        if gravity {
+            // The impulse dt_n m g on every node does the work dt_n g . sum m (v^{n-1/2} +
+            // v^{n+1/2}) / 2 with the final v^{n+1/2}, half of it after t_n (on the first step
+            // dt^{1/2} and v^{-1/2} = 2 v_0 - v^{1/2}, as for the pressure impulses).
+            let mut momentum = [0.0; 2];
+            for (v, m) in self.s.v.iter().zip(&self.model.mass) {
+                momentum[0] += m * v[0];
+                momentum[1] += m * v[1];
+            }
+            if self.s.n == 0 {
+                momentum_old = [
+                    2.0 * momentum_old[0] - momentum[0],
+                    2.0 * momentum_old[1] - momentum[1],
+                ];
+            }
+            let g = self.model.gravity;
+            let before = 0.5 * load_dt * (g[0] * momentum_old[0] + g[1] * momentum_old[1]);
+            let after = 0.5 * load_dt * (g[0] * momentum[0] + g[1] * momentum[1]);
+            self.s.gravity_work += before + after;
+            self.s.gravity_after = after;
+        }
         if damped {
             let (mut before, mut after) = (0.0, 0.0);
             for ((o, v), m) in self
@@ -627,7 +668,8 @@ impl CpuSolver {
                 viscous: self.s.bulk_work - (self.s.damping_work - self.s.damping_after),
                 plastic: self.s.plastic_work,
                 external: self.s.external_work - reaction_after
-                    + (self.s.pressure_work - self.s.pressure_after),
+                    + (self.s.pressure_work - self.s.pressure_after)
+                    + (self.s.gravity_work - self.s.gravity_after),
                 contact: -(self.s.contact_work - self.s.contact_after),
                 contacts: self
                     .s

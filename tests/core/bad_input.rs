@@ -457,6 +457,27 @@ fn non_convex_explicit_mesh() {
 }
 
 #[test]
+fn bad_gravity_names_the_key_and_value() {
+    let with = |g: &str| {
+        variant(
+            "end_time = 1.0e-5\n",
+            &format!("end_time = 1.0e-5\ngravity = {g}\n"),
+        )
+    };
+    expect_accepted("gravity_ok", &with("[0.0, -9.81]"), true);
+    expect_accepted("gravity_integers", &with("[0, -10]"), false);
+    for (case, g, why) in [
+        ("gravity_scalar", "9.81", "must be a 2-vector"),
+        ("gravity_three", "[0.0, -9.81, 0.0]", "must be a 2-vector"),
+        ("gravity_text", "[\"0\", \"-9.81\"]", "must be a 2-vector"),
+        ("gravity_infinite", "[0.0, -inf]", "must be finite"),
+        ("gravity_nan", "[nan, 0.0]", "must be finite"),
+    ] {
+        expect_rejected(case, &with(g), &["run.gravity", why]);
+    }
+}
+
+#[test]
 fn explicit_triangles_are_read_and_bad_ones_named() {
     let mesh = |quads: &str| {
         variant(
