@@ -26,7 +26,7 @@ struct Params {
     inst_groups: u32,     // workgroups of sum_instances (the second level of the sums; 0: fused)
     gravity_x: f32,       // run.gravity (m/s^2; the loads variant of the node stage applies it)
     gravity_y: f32,
-    _p2: u32,
+    gravity_ramp: f32,    // s: linear ramp of gravity from 0 (0: none)
 }
 
 // Run control, advanced on the GPU so that a step needs no readback.

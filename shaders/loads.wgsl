@@ -31,6 +31,15 @@ override WG: u32 = 64u;
 @group(0) @binding(10) var<storage, read> curves: array<vec2<f32>>;
 
 
+// Gravity at t_n: params.gravity times min(t / gravity_ramp, 1) (CPU: Model::gravity_at).
+fn gravity_now() -> vec2<f32> {
+    var f = 1.0;
+    if (params.gravity_ramp > 0.0) {
+        f = clamp(time_now() / params.gravity_ramp, 0.0, 1.0);
+    }
+    return f * vec2<f32>(params.gravity_x, params.gravity_y);
+}
+
 @compute @workgroup_size(WG)
 fn pressure_force(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
@@ -73,7 +82,7 @@ fn load_work(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     // Gravity's force m g, an external force like the pressure's.
-    fp += vec2<f32>(params.gravity_x, params.gravity_y) / inv_mass[i];
+    fp += gravity_now() / inv_mass[i];
     // The pressure impulse: dt_n F_n (dt^{1/2} F_0 on the first step, with v^{-1/2} as above).
     let j = select(ctrl.dt_node, ctrl.dt_next, first) * fp;
     let pb = 0.5 * dot(j, vm);

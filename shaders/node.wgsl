@@ -21,6 +21,18 @@ override WG: u32 = 64u;
 @group(0) @binding(10) var<storage, read_write> v_old: array<vec2<f32>>;  // v^{n-1/2}, for loads.wgsl
 //#endif
 
+//#if loads
+// Gravity at t_n: params.gravity times min(t / gravity_ramp, 1) (CPU: Model::gravity_at).
+fn gravity_now() -> vec2<f32> {
+    var f = 1.0;
+    if (params.gravity_ramp > 0.0) {
+        let t = (f32(ctrl.t_hi) * 4294967296.0 + f32(ctrl.t_lo)) / params.ticks_per_second;
+        f = clamp(t / params.gravity_ramp, 0.0, 1.0);
+    }
+    return f * vec2<f32>(params.gravity_x, params.gravity_y);
+}
+//#endif
+
 @compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
@@ -42,7 +54,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // (1 + c) m v+ = (1 - c) m v- + dt_n f, c = alpha dt_n / 2 (implicit in v, stable for any alpha).
     v_old[i] = vm;
     // Gravity: the force m g (loads.wgsl sums its work with the pressure's).
-    f += vec2<f32>(params.gravity_x, params.gravity_y) / inv_mass[i];
+    f += gravity_now() / inv_mass[i];
     let c = ctrl.damp_c;
     let vp = ((1.0 - c) / (1.0 + c)) * vm + (ctrl.dt_node * inv_mass[i] / (1.0 + c)) * f;
 //#else

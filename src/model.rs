@@ -136,6 +136,8 @@ pub struct Model {
     pub mass_damping: f64,
     /// Gravity (m/s^2), [0, 0] for none.
     pub gravity: [f64; 2],
+    /// Duration of its linear ramp from 0 (s; 0: none).
+    pub gravity_ramp: f64,
 }
 
 impl Model {
@@ -165,6 +167,7 @@ impl Model {
             pressures: Vec::new(),
             mass_damping: scene.run.mass_damping,
             gravity: scene.run.gravity,
+            gravity_ramp: scene.run.gravity_ramp,
         };
         let any_axi = scene
             .bodies
@@ -532,6 +535,23 @@ impl Model {
         } else {
             p.thickness
         }
+    }
+
+    /// Gravity at time `t`: [`Model::gravity`] times min(t / ramp, 1).
+    pub fn gravity_at(&self, t: f64) -> [f64; 2] {
+        let f = if self.gravity_ramp > 0.0 {
+            (t / self.gravity_ramp).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        [f * self.gravity[0], f * self.gravity[1]]
+    }
+
+    /// Whether a contact or rigid wall has friction (the history then has `friction_work` and
+    /// the contacts' `.ft` columns).
+    pub fn has_friction(&self) -> bool {
+        self.contacts.iter().any(|c| c.friction > 0.0)
+            || self.walls.iter().any(|w| w.friction > 0.0)
     }
 
     /// Whether a body is of a J2 plastic material (the solvers then keep a plastic state per

@@ -421,6 +421,7 @@ pub fn run_with(
                 &bodies,
                 &contacts,
                 model.has_plasticity(),
+                model.has_friction(),
                 !model.radius.is_empty(),
             )?,
             match scene.run.field_interval {
@@ -446,6 +447,7 @@ pub fn run_with(
                     c.history_bytes,
                     c.history_rows,
                     model.has_plasticity(),
+                    model.has_friction(),
                 )?,
                 match scene.run.field_interval {
                     Some(_) => Some(FieldWriter::resume(

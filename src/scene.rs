@@ -153,6 +153,7 @@ struct RawContact {
     self_contact: Option<bool>,
     penalty_scale: Option<f64>,
     surfaces: Option<Vec<String>>,
+    friction: Option<f64>,
 }
 
 /// `bodies` of a `[[contact]]`: the string "all" or a list of names.
@@ -174,6 +175,7 @@ struct RawWall {
     bodies: Option<Vec<String>>,
     method: Option<String>,
     penalty_scale: Option<f64>,
+    friction: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -190,6 +192,7 @@ struct RawRun {
     bulk_viscosity: Option<RawBulk>,
     mass_damping: Option<f64>,
     gravity: Option<toml::Value>,
+    gravity_ramp: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -599,6 +602,8 @@ pub struct Contact {
     /// only the boundary segments among them (and their nodes) take part. `None`: the whole
     /// boundary of each body.
     pub surfaces: Option<Vec<(String, Vec<[u32; 2]>)>>,
+    /// Coulomb friction coefficient mu (0: frictionless).
+    pub friction: f64,
 }
 
 /// A fixed planar rigid wall.
@@ -616,6 +621,8 @@ pub struct RigidWall {
     pub method: ContactMethod,
     /// Penalty scale `s` (penalty only).
     pub penalty_scale: f64,
+    /// Coulomb friction coefficient mu (0: frictionless).
+    pub friction: f64,
 }
 
 /// A pressure (traction) load on the boundary edges of a body inside a box.
@@ -681,6 +688,8 @@ pub struct RunSettings {
     pub mass_damping: f64,
     /// Gravity (m/s^2): a body force m g on every node ([0, 0]: none).
     pub gravity: [f64; 2],
+    /// Duration of a linear ramp of gravity from 0 (s; 0: gravity in full from t = 0).
+    pub gravity_ramp: f64,
 }
 
 /// A validated scene.
@@ -1077,6 +1086,22 @@ impl Validator<'_> {
         }
     }
 
+    /// The Coulomb coefficient `friction` of a contact or wall: finite and >= 0, and only with a
+    /// method that carries it (Lagrange; the penalty's Curnier-Mroz law is not built yet).
+    fn friction(&self, key: &str, mu: Option<f64>, method: ContactMethod) -> Result<f64> {
+        let Some(mu) = mu else { return Ok(0.0) };
+        let mu = self.non_negative(key, mu)?;
+        if mu > 0.0 && method != ContactMethod::Lagrange {
+            return Err(self.invalid(
+                key,
+                fmt_num(mu),
+                "friction is carried by method = \"lagrange\" only so far (the penalty \
+                 method's regularized friction is not built yet)",
+            ));
+        }
+        Ok(mu)
+    }
+
     fn contact(&self, key: &str, c: &RawContact, bodies: &[Body]) -> Result<Contact> {
         let bkey = format!("{key}.bodies");
         let self_contact = c.self_contact.unwrap_or(false);
@@ -1207,6 +1232,7 @@ impl Validator<'_> {
             two_pass: group || c.two_pass.unwrap_or(true),
             penalty_scale,
             surfaces,
+            friction: self.friction(&format!("{key}.friction"), c.friction, method)?,
         })
     }
 
@@ -1262,6 +1288,7 @@ impl Validator<'_> {
             bodies: list,
             method,
             penalty_scale,
+            friction: self.friction(&format!("{key}.friction"), w.friction, method)?,
         })
     }
 
@@ -1378,6 +1405,19 @@ impl Validator<'_> {
                 g
             }
         };
+        let gravity_ramp = match r.gravity_ramp {
+            None => 0.0,
+            Some(t) => {
+                if r.gravity.is_none() {
+                    return Err(self.invalid(
+                        "run.gravity_ramp",
+                        fmt_num(t),
+                        "ramps gravity, but the scene has no `gravity`",
+                    ));
+                }
+                self.positive("run.gravity_ramp", t)?
+            }
+        };
         Ok(RunSettings {
             end_time,
             time_step_scale,
@@ -1391,6 +1431,7 @@ impl Validator<'_> {
             bulk_quadratic,
             mass_damping,
             gravity,
+            gravity_ramp,
         })
     }
 

@@ -105,6 +105,7 @@ impl Builder<'_> {
             segments: Vec::new(),
             segment_body: Vec::new(),
             stiffness: Vec::new(),
+            friction: c.friction,
             candidates: Vec::new(),
         };
         if c.group {
@@ -179,6 +180,7 @@ impl Builder<'_> {
             nodes,
             body,
             stiffness,
+            friction: w.friction,
         }
     }
 }
@@ -242,6 +244,13 @@ impl ContactSet {
             dt: 0.0,
             v_free: vec![[0.0; 2]; n],
             dv: vec![[0.0; 2]; n],
+            dvt: if model.contacts.iter().any(|c| c.friction > 0.0)
+                || model.walls.iter().any(|w| w.friction > 0.0)
+            {
+                vec![[0.0; 2]; n]
+            } else {
+                Vec::new()
+            },
             nodes,
             searched: false,
             margin: if min_length.is_finite() {

@@ -74,6 +74,9 @@ struct Pass {
     segment_body: Vec<u32>,
     /// Penalty stiffness of each segment.
     stiffness: Vec<f64>,
+    /// Coulomb friction coefficient of the interface.
+    #[serde(default)]
+    friction: f64,
     /// Admissible candidate (position in `slaves`, segment) pairs from the last search, sorted.
     candidates: Vec<(u32, u32)>,
 }
@@ -110,6 +113,9 @@ struct Wall {
     body: Vec<u32>,
     /// Penalty stiffness of each node.
     stiffness: Vec<f64>,
+    /// Coulomb friction coefficient.
+    #[serde(default)]
+    friction: f64,
 }
 
 /// An active constraint of the step.
@@ -132,15 +138,37 @@ struct Constraint {
     sign: f64,
     /// Penetration reported for it.
     penetration: f64,
+    /// Coulomb coefficient (0: frictionless).
+    #[serde(default)]
+    mu: f64,
+    /// (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along the tangent t = (-n_y, n_x): the relative
+    /// tangential velocity change per unit tangential impulse.
+    #[serde(default)]
+    wt: f64,
+    /// Tangential (friction) impulse along t, |lt| <= mu lambda.
+    #[serde(default)]
+    lt: f64,
+}
+
+impl Constraint {
+    /// The tangent t = (-n_y, n_x) of the friction impulse.
+    #[inline]
+    fn tangent(&self) -> [f64; 2] {
+        [-self.n[1], self.n[0]]
+    }
 }
 
 /// Result of the contact step.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct StepWork {
-    /// Work of the step's contact impulses, J (v^{n-1/2} + v^{n+1/2}) / 2.
+    /// Work of the step's contact impulses, J (v^{n-1/2} + v^{n+1/2}) / 2 (friction included).
     pub work: f64,
     /// The part of it after t_n, J v^{n+1/2} / 2.
     pub after: f64,
+    /// The friction impulses' share of `work` (<= 0: friction dissipates).
+    pub friction: f64,
+    /// Its part after t_n.
+    pub friction_after: f64,
 }
 
 /// Contact state of a model on the CPU.
@@ -182,6 +210,9 @@ pub struct ContactSet {
     dt: f64,
     v_free: Vec<[f64; 2]>,
     dv: Vec<[f64; 2]>,
+    /// The friction impulses' share of `dv` (scratch; empty without friction).
+    #[serde(default)]
+    dvt: Vec<[f64; 2]>,
     cons: Vec<Constraint>,
 }
 
@@ -259,6 +290,9 @@ impl ContactSet {
         for d in &mut self.dv {
             *d = [0.0; 2];
         }
+        for d in &mut self.dvt {
+            *d = [0.0; 2];
+        }
         self.dt = dt;
         self.collect_passes(dt, dt_n, None);
         self.collect_walls(dt, dt_n, None);
@@ -276,11 +310,15 @@ impl ContactSet {
             }
             let g = g as usize;
             let m = self.mass[l] / self.inv_mass_scale;
+            let dt_part = self.dvt.get(l).copied().unwrap_or([0.0; 2]);
             for k in 0..2 {
                 let vn = v[g][k] + d[k];
                 let j = m * d[k];
                 work.work += 0.5 * j * (self.v_old[l][k] + vn);
                 work.after += 0.5 * j * vn;
+                let jt = m * dt_part[k];
+                work.friction += 0.5 * jt * (self.v_old[l][k] + vn);
+                work.friction_after += 0.5 * jt * vn;
                 v[g][k] = vn;
             }
         }

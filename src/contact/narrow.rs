@@ -313,7 +313,15 @@ impl ContactSet {
                     lambda: 0.0,
                     sign: p.sign(si as usize, j),
                     penetration: 0.0,
+                    mu: 0.0,
+                    wt: 0.0,
+                    lt: 0.0,
                 };
+                if p.friction > 0.0 && p.method == ContactMethod::Lagrange {
+                    // (No friction where no node can move along the tangent.)
+                    c.wt = self.weight(s, Some((a, b)), pr.xi, c.tangent(), 1.0);
+                    c.mu = if c.wt > 0.0 { p.friction } else { 0.0 };
+                }
                 if p.method == ContactMethod::Penalty {
                     let rate = self.free_relative(s, Some((a, b)), pr.xi, pr.normal);
                     let g_trial = pr.gap + dt * rate;
@@ -358,7 +366,14 @@ impl ContactSet {
                     lambda: 0.0,
                     sign: 1.0,
                     penetration: 0.0,
+                    mu: 0.0,
+                    wt: 0.0,
+                    lt: 0.0,
                 };
+                if w.friction > 0.0 && w.method == ContactMethod::Lagrange {
+                    c.wt = self.weight(l, None, 0.0, c.tangent(), 1.0);
+                    c.mu = if c.wt > 0.0 { w.friction } else { 0.0 };
+                }
                 match w.method {
                     ContactMethod::Lagrange => {
                         if g_tr >= 0.0 {

@@ -20,6 +20,10 @@ pub struct ContactSample {
     pub max_penetration: f64,
     /// Slave nodes with a non-zero impulse at the sample step.
     pub active_nodes: u32,
+    /// Friction force, averaged as `force`: the sum of each constraint's tangential impulse
+    /// along its tangent t = (-n_y, n_x) (for a wall, along the wall's t), with the sign of
+    /// `force` (included in `force` too).
+    pub ft: f64,
 }
 
 /// A contact or wall as the history sees it.
@@ -30,6 +34,9 @@ pub(super) struct Interface {
     impulse: [f64; 2],
     /// Impulse on the first body at the last step.
     step_impulse: [f64; 2],
+    /// Friction impulse along the tangents since the last sample.
+    #[serde(default)]
+    tangential: f64,
     /// Force-weighting time since the last sample.
     elapsed: f64,
     active: u32,
@@ -54,6 +61,12 @@ impl ContactSet {
                 -(c.g0 + dt * self.relative(&c))
             };
             let i = &mut self.interfaces[c.interface as usize];
+            if c.lt != 0.0 {
+                let t = c.tangent();
+                i.step_impulse[0] += c.sign * c.lt * t[0];
+                i.step_impulse[1] += c.sign * c.lt * t[1];
+                i.tangential += c.sign * c.lt;
+            }
             if c.lambda > 0.0 {
                 i.step_impulse[0] += c.sign * c.lambda * c.n[0];
                 i.step_impulse[1] += c.sign * c.lambda * c.n[1];
@@ -75,17 +88,22 @@ impl ContactSet {
         self.interfaces
             .iter_mut()
             .map(|i| {
-                let force = if i.elapsed > 0.0 {
-                    [i.impulse[0] / i.elapsed, i.impulse[1] / i.elapsed]
+                let (force, ft) = if i.elapsed > 0.0 {
+                    (
+                        [i.impulse[0] / i.elapsed, i.impulse[1] / i.elapsed],
+                        i.tangential / i.elapsed,
+                    )
                 } else {
-                    [0.0; 2]
+                    ([0.0; 2], 0.0)
                 };
                 i.impulse = [0.0; 2];
+                i.tangential = 0.0;
                 i.elapsed = 0.0;
                 ContactSample {
                     force,
                     max_penetration: i.max_penetration,
                     active_nodes: i.active,
+                    ft,
                 }
             })
             .collect()
@@ -97,6 +115,7 @@ impl Interface {
             name: name.to_string(),
             impulse: [0.0; 2],
             step_impulse: [0.0; 2],
+            tangential: 0.0,
             elapsed: 0.0,
             active: 0,
             max_penetration: 0.0,

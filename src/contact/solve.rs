@@ -198,6 +198,21 @@ impl ContactSet {
                     self.cons[k].lambda = lambda;
                     change = change.max((d * c.w).abs());
                 }
+                if c.mu > 0.0 {
+                    // Coulomb: the tangential impulse that stops the relative tangential
+                    // velocity, inside the cone |lt| <= mu lambda (stick), else on its edge
+                    // against the slip (slip).
+                    let t = c.tangent();
+                    let vt = self.free_relative_constraint(&c, t) + self.relative_along(&c, t);
+                    let bound = c.mu * lambda;
+                    let lt = (c.lt - vt / c.wt).clamp(-bound, bound);
+                    let d = lt - c.lt;
+                    if d != 0.0 {
+                        self.impulse_along(&c, t, d, true);
+                        self.cons[k].lt = lt;
+                        change = change.max((d * c.wt * dt).abs());
+                    }
+                }
             }
             if change <= tol {
                 break;
@@ -232,31 +247,68 @@ impl ContactSet {
     /// Relative normal velocity change of constraint `c` from the impulses so far.
     #[inline]
     pub(super) fn relative(&self, c: &Constraint) -> f64 {
+        self.relative_along(c, c.n)
+    }
+
+    /// Relative velocity change of constraint `c` along `dir` from the impulses so far.
+    #[inline]
+    pub(super) fn relative_along(&self, c: &Constraint, dir: [f64; 2]) -> f64 {
         let ds = self.dv[c.s as usize];
-        let mut r = ds[0] * c.n[0] + ds[1] * c.n[1];
+        let mut r = ds[0] * dir[0] + ds[1] * dir[1];
         if c.a != u32::MAX {
             let da = self.dv[c.a as usize];
             let db = self.dv[c.b as usize];
-            r -= (1.0 - c.xi) * (da[0] * c.n[0] + da[1] * c.n[1])
-                + c.xi * (db[0] * c.n[0] + db[1] * c.n[1]);
+            r -= (1.0 - c.xi) * (da[0] * dir[0] + da[1] * dir[1])
+                + c.xi * (db[0] * dir[0] + db[1] * dir[1]);
         }
         r
+    }
+
+    /// Relative velocity of constraint `c` along `dir` of the free update.
+    #[inline]
+    fn free_relative_constraint(&self, c: &Constraint, dir: [f64; 2]) -> f64 {
+        let ab = (c.a != u32::MAX).then_some((c.a, c.b));
+        self.free_relative(c.s, ab, c.xi, dir)
     }
 
     /// Applies impulse `lambda` along `c.n` (slave) and its reaction (master nodes).
     #[inline]
     pub(super) fn impulse(&mut self, c: &Constraint, lambda: f64) {
+        self.impulse_along(c, c.n, lambda, false);
+    }
+
+    /// Applies impulse `lambda` along `dir` (slave) and its reaction (master nodes); `friction`:
+    /// also into the friction share `dvt`.
+    #[inline]
+    pub(super) fn impulse_along(
+        &mut self,
+        c: &Constraint,
+        dir: [f64; 2],
+        lambda: f64,
+        friction: bool,
+    ) {
         let sc = self.inv_mass_scale;
-        let im = self.inv_mass[c.s as usize].map(|x| x * sc);
-        let d = &mut self.dv[c.s as usize];
-        d[0] += lambda * c.n[0] * im[0];
-        d[1] += lambda * c.n[1] * im[1];
+        let mut nodes = [(c.s, 1.0), (u32::MAX, 0.0), (u32::MAX, 0.0)];
         if c.a != u32::MAX {
-            for (node, share) in [(c.a, 1.0 - c.xi), (c.b, c.xi)] {
-                let im = self.inv_mass[node as usize].map(|x| x * sc);
-                let d = &mut self.dv[node as usize];
-                d[0] -= share * lambda * c.n[0] * im[0];
-                d[1] -= share * lambda * c.n[1] * im[1];
+            nodes[1] = (c.a, -(1.0 - c.xi));
+            nodes[2] = (c.b, -c.xi);
+        }
+        for (node, share) in nodes {
+            if node == u32::MAX {
+                continue;
+            }
+            let im = self.inv_mass[node as usize].map(|x| x * sc);
+            let dd = [
+                share * lambda * dir[0] * im[0],
+                share * lambda * dir[1] * im[1],
+            ];
+            let d = &mut self.dv[node as usize];
+            d[0] += dd[0];
+            d[1] += dd[1];
+            if friction {
+                let d = &mut self.dvt[node as usize];
+                d[0] += dd[0];
+                d[1] += dd[1];
             }
         }
     }

@@ -32,7 +32,7 @@ pub struct Params {
     pub inst_groups: u32,
     pub gravity_x: f32,
     pub gravity_y: f32,
-    pub _p2: u32,
+    pub gravity_ramp: f32,
 }
 
 /// Mirror of WGSL `Control`: the run state advanced on the GPU.

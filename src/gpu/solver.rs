@@ -126,6 +126,13 @@ impl GpuSolver {
         fused: Option<bool>,
         contact: ContactOptions,
     ) -> Result<Self> {
+        if model.has_friction() {
+            return Err(Error::Gpu(
+                "friction (`friction` on a [[contact]] or [[rigid_wall]]) runs on the CPU \
+                 reference only so far: use --backend cpu"
+                    .into(),
+            ));
+        }
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -463,6 +470,7 @@ impl GpuSolver {
                 plastic: if pw > 0 { w(9) as f64 } else { 0.0 },
                 external: w(8) as f64,
                 contact: 0.0,
+                friction: 0.0,
                 contacts: Vec::new(),
                 body_velocity: (0..nb)
                     .map(|b| [w(9 + pw + 2 * b) as f64, w(10 + pw + 2 * b) as f64])
@@ -483,6 +491,7 @@ impl GpuSolver {
                         force: [r(1 + 4 * f), r(2 + 4 * f)],
                         max_penetration: r(3 + 4 * f),
                         active_nodes: r(4 + 4 * f) as u32,
+                        ft: 0.0,
                     })
                     .collect();
             }

@@ -366,6 +366,7 @@ impl GpuState {
             mass_damping: model.mass_damping as f32,
             gravity_x: model.gravity[0] as f32,
             gravity_y: model.gravity[1] as f32,
+            gravity_ramp: model.gravity_ramp as f32,
             loads: u32::from(has_loads),
             plastic: u32::from(plastic),
             inst_groups: if fused {
@@ -373,7 +374,6 @@ impl GpuState {
             } else {
                 (instances.len() as u32).min(MAX_INST_GROUPS)
             },
-            ..Default::default()
         };
         let control = Control {
             flags: FLAG_SAMPLE

@@ -37,16 +37,23 @@ pub struct EnergyAudit {
 
 impl EnergyAudit {
     /// Total energy of a sample: kinetic + internal + hourglass + viscous work + plastic work +
-    /// contact energy - external work.
+    /// contact energy + friction work - external work.
     pub fn total(s: &Sample) -> f64 {
-        s.kinetic + s.internal + s.hourglass + s.viscous + s.plastic + s.contact - s.external
+        s.kinetic + s.internal + s.hourglass + s.viscous + s.plastic + s.contact + s.friction
+            - s.external
     }
 
     /// The balance error of `s` relative to the largest energy seen so far (this sample included).
     pub fn error(&mut self, s: &Sample) -> f64 {
         let total = Self::total(s);
         let e0 = *self.initial.get_or_insert(total);
-        let stored = s.kinetic + s.internal + s.hourglass + s.viscous + s.plastic + s.contact.abs();
+        let stored = s.kinetic
+            + s.internal
+            + s.hourglass
+            + s.viscous
+            + s.plastic
+            + s.contact.abs()
+            + s.friction.abs();
         self.largest = self
             .largest
             .max(stored.abs())
@@ -71,6 +78,8 @@ pub struct HistoryWriter {
     rows: u64,
     /// Whether the rows have the `plastic_work` column.
     plastic: bool,
+    /// Whether the rows have the `friction_work` column and the contacts' `.ft` columns.
+    friction: bool,
 }
 
 impl HistoryWriter {
@@ -86,6 +95,7 @@ impl HistoryWriter {
         bodies: &[String],
         contacts: &[String],
         plastic: bool,
+        friction: bool,
         per_radian: bool,
     ) -> Result<Self> {
         let file = File::create(path).map_err(|source| Error::Write {
@@ -98,6 +108,7 @@ impl HistoryWriter {
             bytes: 0,
             rows: 0,
             plastic,
+            friction,
         };
         if per_radian {
             w.line(PER_RADIAN)?;
@@ -106,6 +117,9 @@ impl HistoryWriter {
         if plastic {
             header = header.replace(",viscous_work,", ",viscous_work,plastic_work,");
         }
+        if friction {
+            header = header.replace(",contact_energy,", ",contact_energy,friction_work,");
+        }
         for b in bodies {
             header.push_str(&format!(",{b}.vx,{b}.vy"));
         }
@@ -113,6 +127,9 @@ impl HistoryWriter {
             header.push_str(&format!(
                 ",{c}.fx,{c}.fy,{c}.max_penetration,{c}.active_nodes"
             ));
+            if friction {
+                header.push_str(&format!(",{c}.ft"));
+            }
         }
         w.line(&header)?;
         Ok(w)
@@ -124,7 +141,13 @@ impl HistoryWriter {
     /// # Errors
     /// [`Error::Checkpoint`] when the file is shorter than `bytes` (it is not the checkpoint's),
     /// [`Error::Write`] when it cannot be opened.
-    pub fn resume(path: &Path, bytes: u64, rows: u64, plastic: bool) -> Result<Self> {
+    pub fn resume(
+        path: &Path,
+        bytes: u64,
+        rows: u64,
+        plastic: bool,
+        friction: bool,
+    ) -> Result<Self> {
         use std::io::{Seek, SeekFrom};
         let write_err = |source| Error::Write {
             path: path.to_path_buf(),
@@ -151,6 +174,7 @@ impl HistoryWriter {
             bytes,
             rows,
             plastic,
+            friction,
         })
     }
 
@@ -184,8 +208,13 @@ impl HistoryWriter {
         } else {
             String::new()
         };
+        let friction = if self.friction {
+            format!(",{:e}", s.friction)
+        } else {
+            String::new()
+        };
         let mut line = format!(
-            "{:e},{},{:e},{:e},{:e},{:e},{:e}{plastic},{:e},{:e},{:e}",
+            "{:e},{},{:e},{:e},{:e},{:e},{:e}{plastic},{:e}{friction},{:e},{:e}",
             s.time,
             s.step,
             s.dt,
@@ -205,6 +234,9 @@ impl HistoryWriter {
                 ",{:e},{:e},{:e},{}",
                 c.force[0], c.force[1], c.max_penetration, c.active_nodes
             ));
+            if self.friction {
+                line.push_str(&format!(",{:e}", c.ft));
+            }
         }
         self.rows += 1;
         self.line(&line)

@@ -48,6 +48,11 @@ struct CpuState {
     /// Work of the contact impulses so far, and the part of the last step's after t_n.
     contact_work: f64,
     contact_after: f64,
+    /// The friction impulses' share of them.
+    #[serde(default)]
+    friction_work: f64,
+    #[serde(default)]
+    friction_after: f64,
     hourglass_work: f64,
     bulk_work: f64,
     external_work: f64,
@@ -124,6 +129,8 @@ impl CpuSolver {
             contact: ContactSet::new(&model),
             contact_work: 0.0,
             contact_after: 0.0,
+            friction_work: 0.0,
+            friction_after: 0.0,
             hourglass_work: 0.0,
             bulk_work: 0.0,
             external_work: 0.0,
@@ -451,7 +458,7 @@ impl CpuSolver {
         let gravity = self.plan.has(Stage::Gravity);
         let mut momentum_old = [0.0; 2];
         if gravity {
-            let g = self.model.gravity;
+            let g = self.model.gravity_at(self.s.t);
             for (i, f) in self.s.f.iter_mut().enumerate() {
                 let m = self.model.mass[i];
                 f[0] += m * g[0];
@@ -567,6 +574,8 @@ impl CpuSolver {
             );
             self.s.contact_work += w.work;
             self.s.contact_after = w.after;
+            self.s.friction_work += w.friction;
+            self.s.friction_after = w.friction_after;
         }
         // Work of the pressure and damping impulses, J (v^{n-1/2} + v^{n+1/2}) / 2 with the final
         // v^{n+1/2} (boundaries and contact applied), half of it after t_n.
@@ -599,7 +608,7 @@ impl CpuSolver {
                     2.0 * momentum_old[1] - momentum[1],
                 ];
             }
-            let g = self.model.gravity;
+            let g = self.model.gravity_at(self.s.t);
             let before = 0.5 * load_dt * (g[0] * momentum_old[0] + g[1] * momentum_old[1]);
             let after = 0.5 * load_dt * (g[0] * momentum[0] + g[1] * momentum[1]);
             self.s.gravity_work += before + after;
@@ -670,7 +679,10 @@ impl CpuSolver {
                 external: self.s.external_work - reaction_after
                     + (self.s.pressure_work - self.s.pressure_after)
                     + (self.s.gravity_work - self.s.gravity_after),
-                contact: -(self.s.contact_work - self.s.contact_after),
+                // The friction impulses' work apart: dissipated, its own column.
+                contact: -(self.s.contact_work - self.s.contact_after)
+                    + (self.s.friction_work - self.s.friction_after),
+                friction: -(self.s.friction_work - self.s.friction_after),
                 contacts: self
                     .s
                     .contact

@@ -178,6 +178,8 @@ pub struct Sample {
     /// Contact energy: penalty energy stored plus the work the contact corrections removed
     /// (minus the work the contact impulses did on the model).
     pub contact: f64,
+    /// Work dissipated by friction (>= 0; 0 without friction).
+    pub friction: f64,
     /// Per contact and rigid wall (in the scene's order, contacts first).
     pub contacts: Vec<crate::contact::ContactSample>,
     /// Per body: momentum / mass at t_n.

@@ -154,6 +154,19 @@ pub enum MetricKind {
     /// |sigma_vm - closed form| over the elements of `body` at the end (Pa), at the strain
     /// 1 - (extent along y) / (reference extent).
     UniaxialJ2Error,
+    /// When the velocity of `body` along `component` reaches 0 (s): the zero of the
+    /// least-squares line through the rows whose velocity lies between 10 % and 90 % of the
+    /// initial one (the sliding phase of a block that decelerates uniformly; the vibrations of
+    /// an elastic body average out, and its last creep before it sticks does not count).
+    StopTime,
+    /// The mass-weighted mean displacement of the nodes of `body` along `component` at the end
+    /// (m): how far its centre of mass moved.
+    Displacement,
+    /// The work dissipated by friction at the end (`friction_work`, J or J/m).
+    FrictionWork,
+    /// The least-squares slope of the velocity of `body` along `component` over the history
+    /// rows (m/s^2): a constant acceleration.
+    Acceleration,
 }
 
 /// A bound value: a number, or an expression over the run's variables (e.g. `"0.9 / n"`).
@@ -370,14 +383,22 @@ impl Case {
                     }
                 }
                 K::StressError => need("stress", m.stress.is_some())?,
-                K::Extent | K::MaxCoordinate | K::PeakPlasticStrain | K::UniaxialJ2Error => {
-                    need("body", m.body.is_some())?
-                }
+                K::Extent
+                | K::MaxCoordinate
+                | K::PeakPlasticStrain
+                | K::UniaxialJ2Error
+                | K::StopTime
+                | K::Displacement
+                | K::Acceleration => need("body", m.body.is_some())?,
                 K::LameStressError | K::LameDisplacementError => {
                     need("body", m.body.is_some())?;
                     need("lame", m.lame.is_some())?
                 }
-                K::ContactEnergyRatio | K::EnergyDrift | K::EnergyBalance | K::KineticRatio => {}
+                K::ContactEnergyRatio
+                | K::EnergyDrift
+                | K::EnergyBalance
+                | K::KineticRatio
+                | K::FrictionWork => {}
             }
             if let Some(c) = &m.component {
                 if c != "x" && c != "y" {

@@ -143,6 +143,21 @@ pub struct RunData<'a> {
     pub plastic: &'a [crate::step::plastic::PlasticState],
 }
 
+/// The least-squares line through `points` (t, v): its slope and its value at the mean t;
+/// `None` for fewer than two distinct times.
+fn line_fit(points: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let n = points.len() as f64;
+    if points.len() < 2 {
+        return None;
+    }
+    let mt = points.iter().map(|p| p.0).sum::<f64>() / n;
+    let mv = points.iter().map(|p| p.1).sum::<f64>() / n;
+    let (num, den) = points.iter().fold((0.0, 0.0), |(a, c), (t, v)| {
+        (a + (t - mt) * (v - mv), c + (t - mt) * (t - mt))
+    });
+    (den > 0.0).then(|| (num / den, mv))
+}
+
 /// The value of `m` for a run, or why it cannot be measured.
 ///
 /// # Errors
@@ -292,6 +307,40 @@ pub fn measure(m: &Metric, r: &RunData<'_>) -> std::result::Result<f64, String> 
             } else {
                 hi
             }
+        }
+        MetricKind::StopTime => {
+            let b = body()?;
+            let v0 = first.0.body_velocity[b][comp];
+            let phase: Vec<(f64, f64)> = samples
+                .iter()
+                .map(|(s, _)| (s.time, s.body_velocity[b][comp]))
+                .filter(|(_, v)| v0 != 0.0 && (0.1..=0.9).contains(&(v / v0)))
+                .collect();
+            let (slope, at) = line_fit(&phase)
+                .ok_or_else(|| format!("body {:?} has no sliding phase to fit", m.body))?;
+            if slope * v0 >= 0.0 {
+                return Err(format!("body {:?} does not decelerate", m.body));
+            }
+            // v(t) = at + slope (t - mean t): zero at mean t - at / slope.
+            let mean_t = phase.iter().map(|p| p.0).sum::<f64>() / phase.len() as f64;
+            mean_t - at / slope
+        }
+        MetricKind::Displacement => {
+            let b = &r.model.bodies[body()?];
+            b.nodes
+                .clone()
+                .map(|n| r.model.mass[n] * r.displacement[n][comp])
+                .sum::<f64>()
+                / b.mass
+        }
+        MetricKind::FrictionWork => last.0.friction,
+        MetricKind::Acceleration => {
+            let b = body()?;
+            let points: Vec<(f64, f64)> = samples
+                .iter()
+                .map(|(s, _)| (s.time, s.body_velocity[b][comp]))
+                .collect();
+            line_fit(&points).ok_or("fewer than two history rows")?.0
         }
         MetricKind::PeakPlasticStrain => {
             let b = &r.model.bodies[body()?];

@@ -94,7 +94,7 @@ pub struct Outcome {
 
 /// The case files of `assets/verification/`, built into the binary so that `ricochet verify` runs
 /// from any folder: (file name, text), sorted by file name.
-pub const EMBEDDED: [(&str, &str); 10] = [
+pub const EMBEDDED: [(&str, &str); 14] = [
     (
         "disk_wall_10ms.toml",
         include_str!("../../assets/verification/disk_wall_10ms.toml"),
@@ -110,6 +110,14 @@ pub const EMBEDDED: [(&str, &str); 10] = [
     (
         "impedance_1e4.toml",
         include_str!("../../assets/verification/impedance_1e4.toml"),
+    ),
+    (
+        "incline_slide.toml",
+        include_str!("../../assets/verification/incline_slide.toml"),
+    ),
+    (
+        "incline_stick.toml",
+        include_str!("../../assets/verification/incline_stick.toml"),
     ),
     (
         "lame_cylinder.toml",
@@ -130,6 +138,14 @@ pub const EMBEDDED: [(&str, &str); 10] = [
     (
         "rods.toml",
         include_str!("../../assets/verification/rods.toml"),
+    ),
+    (
+        "rolling_disk.toml",
+        include_str!("../../assets/verification/rolling_disk.toml"),
+    ),
+    (
+        "sliding_block.toml",
+        include_str!("../../assets/verification/sliding_block.toml"),
     ),
     (
         "taylor_bar.toml",

@@ -987,8 +987,49 @@ fn contact_keys_are_checked() {
     );
     expect_rejected(
         "wall_unknown_key",
-        &with_contact("[[rigid_wall]]\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\nfriction = 0.3\n"),
-        &["friction"],
+        &with_contact("[[rigid_wall]]\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\nfricton = 0.3\n"),
+        &["fricton"],
+    );
+}
+
+#[test]
+fn bad_friction_names_the_key_and_value() {
+    let wall = |rest: &str| {
+        with_contact(&format!(
+            "[[rigid_wall]]\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\n{rest}\n"
+        ))
+    };
+    expect_accepted("wall_friction_ok", &wall("friction = 0.3"), false);
+    expect_accepted("wall_friction_zero", &wall("friction = 0.0"), false);
+    for (case, rest, needles) in [
+        (
+            "wall_friction_negative",
+            "friction = -0.3",
+            ["rigid_wall[0].friction", "-0.3", ">= 0"],
+        ),
+        (
+            "wall_friction_nan",
+            "friction = nan",
+            ["rigid_wall[0].friction", "NaN", ">= 0"],
+        ),
+        (
+            "wall_friction_infinite",
+            "friction = inf",
+            ["rigid_wall[0].friction", "inf", ">= 0"],
+        ),
+        (
+            "wall_friction_penalty",
+            "method = \"penalty\"\nfriction = 0.3",
+            ["rigid_wall[0].friction", "0.3", "lagrange"],
+        ),
+    ] {
+        expect_rejected(case, &wall(rest), &needles);
+    }
+    let text = with_contact("[[contact]]\nbodies = [\"block\", \"other\"]\nfriction = -1.0\n");
+    expect_rejected(
+        "contact_friction_negative",
+        &text,
+        &["contact[0].friction", "-1", ">= 0"],
     );
 }
 

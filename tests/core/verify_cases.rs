@@ -267,3 +267,47 @@ fn contact_pressure_metrics_give_the_uniform_pressure_of_a_block_pressed_on_a_wa
     assert!(value("kinetic_ratio") < 1e-6, "{csv}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_friction_cases_pass_their_bounds_on_the_cpu() {
+    // REFERENCES.md section 7 (assets/verification/): the block sliding to rest, the block on a
+    // 30-degree incline sliding (mu = 0.3) and sticking (mu = 0.7), the disk sliding into
+    // rolling; their quick ladders on the CPU reference, every level judged.
+    let out = tmp_dir("verify-friction");
+    let o = run_bin(&[
+        "verify",
+        "--quick",
+        "--backend",
+        "cpu",
+        "--case",
+        "sliding_block",
+        "incline_slide",
+        "incline_stick",
+        "rolling_disk",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let results = std::fs::read_to_string(out.join("results.csv")).expect("results.csv");
+    eprintln!("{results}");
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for metric in [
+        "stop_time",
+        "distance",
+        "friction_work",
+        "acceleration",
+        "drift",
+        "rolling_speed",
+        "energy_balance",
+    ] {
+        assert!(
+            results.contains(&format!(",{metric},")),
+            "no {metric} in\n{results}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
