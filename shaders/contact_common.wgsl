@@ -44,7 +44,7 @@ struct ContactParams {
     jp_rounds: u32,       // colouring rounds recorded
     colors_recorded: u32, // colour dispatches recorded per sweep (per-colour path)
     tolerance: f32,       // a sweep converges when no gap changes by more than this (m)
-    _p0: u32,
+    friction: u32,        // 1: some slot has friction (history rows carry its work and ft)
     o_bcount: u32,        // ws offsets
     o_boff: u32,
     o_bcur: u32,
@@ -62,7 +62,7 @@ struct ContactParams {
     o_iface: u32,         // first slot of each interface (n_ifaces + 1)
     o_act: u32,           // the step's Lagrange slots by colour (one-workgroup solve)
     o_mask: u32,          // colours taken per local node (one-workgroup solve's greedy colouring)
-    _p1: u32,
+    f_rf: u32,            // fws offset: friction partials per slot run (with friction)
     _p2: u32,
     _p3: u32,
     f_box: u32,           // fws offsets: segment boxes
@@ -112,7 +112,7 @@ struct Slot {
     k: f32,               // walls: penalty stiffness of the node
     pass_id: u32,          // pass index (walls: NONE)
     body: u32,            // the slave's body
-    _p0: u32,
+    mu: f32,              // Coulomb coefficient of its contact or wall (0: none)
 }
 
 struct Segment {
@@ -138,6 +138,10 @@ struct Cons {
     lambda: f32,
     pen: f32,             // penalty: penetration at u_n
     dt_warm: f32,         // dt_n of the step that found lambda (Lagrange: the next step's warm start)
+    mu: f32,              // Coulomb coefficient (0: frictionless)
+    wt: f32,              // (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along t = (-n_y, n_x)
+    lt: f32,              // friction impulse along t, |lt| <= mu lambda
+    _p0: f32,
 }
 
 @group(0) @binding(1) var<storage, read_write> ctrl: Control;
@@ -203,22 +207,46 @@ fn along(i: u32, n: vec2<f32>, inv_scale: f32) -> f32 {
     return n.x * n.x * im.x + n.y * n.y * im.y;
 }
 
-// Relative normal velocity change of constraint `c` of slave `s` from the impulses so far.
-fn relative(c: Cons, s: u32) -> f32 {
-    var r = dot(dv(s), c.n);
+// Relative velocity change of constraint `c` of slave `s` along `d` from the impulses so far.
+fn relative_along(c: Cons, s: u32, d: vec2<f32>) -> f32 {
+    var r = dot(dv(s), d);
     if (c.a != NONE) {
-        r -= (1.0 - c.xi) * dot(dv(c.a), c.n) + c.xi * dot(dv(c.b), c.n);
+        r -= (1.0 - c.xi) * dot(dv(c.a), d) + c.xi * dot(dv(c.b), d);
     }
     return r;
 }
 
+// Relative normal velocity change of constraint `c` of slave `s` from the impulses so far.
+fn relative(c: Cons, s: u32) -> f32 {
+    return relative_along(c, s, c.n);
+}
+
+// Relative velocity along `d` of the free update (v_free) of constraint `c` of slave `s`.
+fn free_relative_along(c: Cons, s: u32, d: vec2<f32>) -> f32 {
+    var r = dot(vel(s).xy, d);
+    if (c.a != NONE) {
+        r -= (1.0 - c.xi) * dot(vel(c.a).xy, d) + c.xi * dot(vel(c.b).xy, d);
+    }
+    return r;
+}
+
+// The tangent t = (-n_y, n_x) of constraint `c`'s friction impulse.
+fn tangent(c: Cons) -> vec2<f32> {
+    return vec2<f32>(-c.n.y, c.n.x);
+}
+
+// Applies impulse `lambda` along `d` on the slave and its reaction on the master nodes.
+fn apply_impulse_along(c: Cons, s: u32, d: vec2<f32>, lambda: f32, inv_scale: f32) {
+    add_dv(s, lambda * inv_scale * d * c_ref[s].zw);
+    if (c.a != NONE) {
+        add_dv(c.a, -(1.0 - c.xi) * lambda * inv_scale * d * c_ref[c.a].zw);
+        add_dv(c.b, -c.xi * lambda * inv_scale * d * c_ref[c.b].zw);
+    }
+}
+
 // Applies impulse `lambda` along c.n on the slave and its reaction on the master nodes.
 fn apply_impulse(c: Cons, s: u32, lambda: f32, inv_scale: f32) {
-    add_dv(s, lambda * inv_scale * c.n * c_ref[s].zw);
-    if (c.a != NONE) {
-        add_dv(c.a, -(1.0 - c.xi) * lambda * inv_scale * c.n * c_ref[c.a].zw);
-        add_dv(c.b, -c.xi * lambda * inv_scale * c.n * c_ref[c.b].zw);
-    }
+    apply_impulse_along(c, s, c.n, lambda, inv_scale);
 }
 
 // One projected Gauss-Seidel update of slot k's Lagrange constraint; returns the gap change.
@@ -235,5 +263,20 @@ fn pgs_update(k: u32, dt: f32, inv_scale: f32) -> f32 {
         apply_impulse(c, s, d, inv_scale);
         cons[k].lambda = lambda;
     }
-    return abs(d * c.w);
+    var change = abs(d * c.w);
+    if (c.mu > 0.0) {
+        // Coulomb (CPU: ContactSet::sweep): the tangential impulse that stops the relative
+        // tangential velocity inside the cone |lt| <= mu lambda (stick), else on its edge.
+        let t = tangent(c);
+        let vt = free_relative_along(c, s, t) + relative_along(c, s, t);
+        let bound = c.mu * lambda;
+        let lt = clamp(c.lt - vt / c.wt, -bound, bound);
+        let e = lt - c.lt;
+        if (e != 0.0) {
+            apply_impulse_along(c, s, t, e, inv_scale);
+            cons[k].lt = lt;
+            change = max(change, abs(e * c.wt * dt));
+        }
+    }
+    return change;
 }

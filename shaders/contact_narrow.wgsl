@@ -120,6 +120,27 @@ fn no_constraint() -> Cons {
     c.lambda = 0.0;
     c.pen = 0.0;
     c.dt_warm = 0.0;
+    c.mu = 0.0;
+    c.wt = 0.0;
+    c.lt = 0.0;
+    c._p0 = 0.0;
+    return c;
+}
+
+// Friction of a Lagrange constraint of slot `sl` (no friction where no node can move along t).
+fn with_friction(c0: Cons, sl: Slot, inv_scale: f32) -> Cons {
+    var c = c0;
+    if (sl.mu > 0.0 && c.kind == KIND_LAGRANGE) {
+        let t = tangent(c);
+        var wt = along(sl.s, t, inv_scale);
+        if (c.a != NONE) {
+            wt += (1.0 - c.xi) * (1.0 - c.xi) * along(c.a, t, inv_scale) + c.xi * c.xi * along(c.b, t, inv_scale);
+        }
+        if (wt > 0.0) {
+            c.wt = wt;
+            c.mu = sl.mu;
+        }
+    }
     return c;
 }
 
@@ -242,9 +263,9 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
 fn narrow_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
     let sl = slots[k];
     if ((sl.info & SLOT_WALL) != 0u) {
-        return narrow_wall(sl, dt, dtn, inv_scale);
+        return with_friction(narrow_wall(sl, dt, dtn, inv_scale), sl, inv_scale);
     }
-    return narrow_pass(k, sl, dt, dtn, inv_scale);
+    return with_friction(narrow_pass(k, sl, dt, dtn, inv_scale), sl, inv_scale);
 }
 
 // The narrow phase of every slot, with the warm start (as on the CPU): a Lagrange constraint of a

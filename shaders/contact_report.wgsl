@@ -7,7 +7,17 @@
 @group(0) @binding(14) var<storage, read_write> grow: array<u32>;
 
 var<workgroup> sh_f: array<vec4<f32>, CG>;
+var<workgroup> sh_r: array<vec4<f32>, CG>;
 var<workgroup> sh_ni: u32;
+
+// First word of interface f in a history row: after the contact energy (and with friction the
+// friction work), 4 words each (fx, fy, penetration, active), 5 with friction (and ft).
+fn hist_word(f: u32) -> u32 {
+    if (cc.p.friction != 0u) {
+        return 2u + 5u * f;
+    }
+    return 1u + 4u * f;
+}
 
 // 4. Corrected velocities, u_{n+1}, the impulses' work J (v^{n-1/2} + v^{n+1/2}) / 2 (free
 //    directions only: on a constrained one the inverse mass is 0) and kinetic sample sources;
@@ -75,6 +85,9 @@ fn slot_report(k: u32, dt: f32) -> vec4<f32> {
     if (c.lambda > 0.0) {
         r = vec4<f32>(c.sign * c.lambda * c.n, 1.0, 0.0);
     }
+    if (c.kind == KIND_LAGRANGE && c.lt != 0.0) {
+        r = vec4<f32>(r.xy + c.sign * c.lt * tangent(c), r.zw);
+    }
     if (c.kind == KIND_PENALTY) {
         r.w = max(c.pen, 0.0);
     } else {
@@ -83,8 +96,37 @@ fn slot_report(k: u32, dt: f32) -> vec4<f32> {
     return r;
 }
 
+// Slot k's friction: (its impulse along its slave's tangent (ContactSample::ft), the work of its
+// impulses J (v^{n-1/2} + v^{n+1/2}) / 2 on the free directions of its nodes (as the CPU sums
+// m dv_friction per node), the part after t_n, 0). After `finish`: c_pv[3i + 2].xy is v^{n+1/2}.
+fn slot_friction(k: u32) -> vec4<f32> {
+    let c = cons[k];
+    if (c.kind != KIND_LAGRANGE || c.lt == 0.0) {
+        return vec4<f32>(0.0);
+    }
+    let t = tangent(c);
+    let s = slots[k].s;
+    var nodes = array<u32, 3>(s, c.a, c.b);
+    var share = array<f32, 3>(1.0, -(1.0 - c.xi), -c.xi);
+    var before = 0.0;
+    var after = 0.0;
+    for (var q = 0u; q < 3u; q++) {
+        let i = nodes[q];
+        if (i == NONE) {
+            continue;
+        }
+        let free = vec2<f32>(select(0.0, 1.0, c_ref[i].z > 0.0), select(0.0, 1.0, c_ref[i].w > 0.0));
+        let j = share[q] * c.lt * t * free;
+        let vn = c_pv[3u * i + 2u].xy;
+        before += 0.5 * dot(j, vel(i).zw);
+        after += 0.5 * dot(j, vn);
+    }
+    return vec4<f32>(c.lt, before + after, after, 0.0);
+}
+
 // 5a. Per chunk of CG slots, one partial per run of slots of one interface, at the run's first
-//     slot: fws[f_rp + k] = (impulse, active, largest penetration), summed in slot order.
+//     slot: fws[f_rp + k] = (impulse, active, largest penetration), summed in slot order; with
+//     friction also fws[f_rf + k] = the sums of slot_friction.
 @compute @workgroup_size(CG)
 fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
     let k = gid.x;
@@ -93,8 +135,12 @@ fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
         return;
     }
     let dt = ctrl.dt_next;
+    let friction = cc.p.friction != 0u;
     if (k < cc.p.n_slots) {
         sh_f[l] = slot_report(k, dt);
+        if (friction) {
+            sh_r[l] = slot_friction(k);
+        }
     }
     workgroupBarrier();
     if (l != 0u) {
@@ -103,22 +149,33 @@ fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     let n = min(CG, cc.p.n_slots - min(k, cc.p.n_slots));
     var start = k;
     var acc = vec4<f32>(0.0);
+    var accf = vec4<f32>(0.0);
     var f = NONE;
     for (var q = 0u; q < n; q++) {
         let fq = interface_of(k + q);
         if (fq != f) {
             if (f != NONE) {
                 fws[cc.p.f_rp + start] = acc;
+                if (friction) {
+                    fws[cc.p.f_rf + start] = accf;
+                }
             }
             f = fq;
             start = k + q;
             acc = vec4<f32>(0.0);
+            accf = vec4<f32>(0.0);
         }
         let r = sh_f[q];
         acc = vec4<f32>(acc.xyz + r.xyz, max(acc.w, r.w));
+        if (friction) {
+            accf += sh_r[q];
+        }
     }
     if (f != NONE) {
         fws[cc.p.f_rp + start] = acc;
+        if (friction) {
+            fws[cc.p.f_rf + start] = accf;
+        }
     }
 }
 
@@ -153,10 +210,14 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
         sh_ni = cc.p.n_ifaces;
     }
     let ni = workgroupUniformLoad(&sh_ni);
+    let friction = cc.p.friction != 0u;
+    // With friction: the friction work of the step over all interfaces (lane 0), in order.
+    var fwork = vec2<f32>(0.0);
     for (var f = 0u; f < ni; f++) {
         let lo = ws[cc.p.o_iface + f];
         let hi = ws[cc.p.o_iface + f + 1u];
         var r = vec4<f32>(0.0);
+        var rf = vec4<f32>(0.0);
         if (hi > lo) {
             // Runs start at lo and at every chunk boundary after it, up to hi.
             let c0 = lo / CG;
@@ -165,31 +226,46 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
                 let at = select((c0 + j) * CG, lo, j == 0u);
                 let p = fws[cc.p.f_rp + at];
                 r = vec4<f32>(r.xyz + p.xyz, max(r.w, p.w));
+                if (friction) {
+                    rf += fws[cc.p.f_rf + at];
+                }
             }
         }
         sh_f[l] = r;
+        sh_r[l] = rf;
         workgroupBarrier();
         for (var h = CG / 2u; h > 0u; h >>= 1u) {
             if (l < h) {
                 let a = sh_f[l];
                 let b = sh_f[l + h];
                 sh_f[l] = vec4<f32>(a.xyz + b.xyz, max(a.w, b.w));
+                sh_r[l] += sh_r[l + h];
             }
             workgroupBarrier();
         }
         if (l == 0u) {
             let t = sh_f[0];
+            let tf = sh_r[0];
+            fwork += tf.yz;
+            // The friction impulse along the tangents also in the force (x, y), and its
+            // scalar sum in a.w.
             var a = acc_get(f);
-            a += vec4<f32>(t.xy, dtn, 0.0);
+            a += vec4<f32>(t.xy, dtn, tf.x);
             if (sample) {
                 var force = vec2<f32>(0.0);
+                var ft = 0.0;
                 if (a.z > 0.0) {
                     force = a.xy / a.z;
+                    ft = a.w / a.z;
                 }
-                c_hist[row + 1u + 4u * f] = force.x;
-                c_hist[row + 2u + 4u * f] = force.y;
-                c_hist[row + 3u + 4u * f] = t.w;
-                c_hist[row + 4u + 4u * f] = t.z;
+                let h0 = row + hist_word(f);
+                c_hist[h0] = force.x;
+                c_hist[h0 + 1u] = force.y;
+                c_hist[h0 + 2u] = t.w;
+                c_hist[h0 + 3u] = t.z;
+                if (friction) {
+                    c_hist[h0 + 4u] = ft;
+                }
                 a = vec4<f32>(0.0);
             }
             acc_set(f, a);
@@ -217,9 +293,15 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     var w = acc_get(cc.p.n_ifaces);
     w.x += total.x;
     w.y = total.y;
+    // The friction impulses' share (z: so far, w: this step's part after t_n), apart.
+    w.z += fwork.x;
+    w.w = fwork.y;
     acc_set(cc.p.n_ifaces, w);
     if (sample) {
-        c_hist[row] = -(w.x - w.y);
+        c_hist[row] = -(w.x - w.y) + (w.z - w.w);
+        if (friction) {
+            c_hist[row + 1u] = -(w.z - w.w);
+        }
     }
     // Sweeps of this step (per-colour path: the sweeps that ran).
     if (atomicLoad(&cc.lagrange) > 0u) {

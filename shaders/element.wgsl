@@ -277,12 +277,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         a0t = area0 * rr;
     }
 
-    // Displacement gradient H = F - I and its rate.
+    // Displacement gradient H = F - I and its rate, from the corners' displacements and
+    // velocities relative to corner 0 (the same in exact arithmetic, since sum_a b_a = 0): in f32
+    // a rigid translation then gives no strain at all, where the absolute u (a body slid by many
+    // element sizes) would leave eps_f32 u / h of it, random per element and step.
     var h = vec4<f32>(0.0);   // xx xy yx yy
     var fd = vec4<f32>(0.0);
-    for (var a = 0; a < 4; a++) {
-        h += vec4<f32>(u[a].x * bx[a], u[a].x * by[a], u[a].y * bx[a], u[a].y * by[a]);
-        fd += vec4<f32>(v[a].x * bx[a], v[a].x * by[a], v[a].y * bx[a], v[a].y * by[a]);
+    for (var a = 1; a < 4; a++) {
+        let du = u[a] - u[0];
+        let dw = v[a] - v[0];
+        h += vec4<f32>(du.x * bx[a], du.x * by[a], du.y * bx[a], du.y * by[a]);
+        fd += vec4<f32>(dw.x * bx[a], dw.x * by[a], dw.y * bx[a], dw.y * by[a]);
     }
     let f = h + vec4<f32>(1.0, 0.0, 0.0, 1.0);
     let jm1 = h.x + h.w + h.x * h.w - h.y * h.z;   // J - 1 without cancellation
@@ -419,8 +424,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         // Scaled with the shear modulus 2 mu (see ElementParams::hourglass_modulus).
         let k = b.hourglass_coefficient * 2.0 * b.mu * a0t * bb / gg;
         var q = vec2<f32>(0.0);
-        for (var a = 0; a < 4; a++) {
-            q += gamma[a] * u[a];
+        for (var a = 1; a < 4; a++) {
+            q += gamma[a] * (u[a] - u[0]);
         }
         for (var a = 0; a < 4; a++) {
             force[a] -= k * gamma[a] * q;
@@ -429,8 +434,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     } else if (b.hourglass == 1u && !tri) {
         let rho_c = sqrt(2.0 * b.mu * b.density);
         let damp = b.hourglass_coefficient * rho_c * a0t * sqrt(bb) / gg;
-        for (var a = 0; a < 4; a++) {
-            hg_rate += gamma[a] * v[a];
+        for (var a = 1; a < 4; a++) {
+            hg_rate += gamma[a] * (v[a] - v[0]);
         }
         hg_q = damp * hg_rate;
         for (var a = 0; a < 4; a++) {

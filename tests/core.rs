@@ -11,6 +11,8 @@
 //! - [`wave`]: 1D waves in a rod strip against the dispersion table of `REFERENCES.md` section 2;
 //! - [`energy`]: the energy audit of a free-vibrating block (conservative and dissipative), of a
 //!   pressure load and of mass damping;
+//! - [`friction`]: Coulomb friction with Lagrange contact: a block sliding on a floor and on a
+//!   clamped block decelerates at mu g, its friction work and force;
 //! - [`gravity`]: gravity as a body force: exact free fall and its work, a block resting on a wall;
 //! - [`patch_contact`]: the contact patch test (two blocks, non-matching meshes, pressure load,
 //!   mass damping): two-pass Lagrange exact, one pass failing as it should;
@@ -49,6 +51,8 @@ mod bad_input;
 mod contact;
 #[path = "core/energy.rs"]
 mod energy;
+#[path = "core/friction.rs"]
+mod friction;
 #[path = "core/fuzz.rs"]
 mod fuzz;
 #[path = "core/general_contact.rs"]

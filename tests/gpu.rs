@@ -659,6 +659,87 @@ mod load_curve_scene;
 #[path = "shared/gravity_scene.rs"]
 mod gravity_scene;
 
+#[path = "shared/friction_scenes.rs"]
+mod friction_scenes;
+
+/// Coulomb friction on the device (the tangential update in the Lagrange sweeps, its work and
+/// force in the reports): the block sliding on a rigid floor and on a clamped block
+/// (node-to-segment, both passes), as on the CPU. The floor nodes chatter under the suddenly
+/// applied weight, and f32 and f64 chatter differently (the rows' velocities differ by up to
+/// 1.3e-3 v0 in that vibration), so what is compared is the motion: the deceleration (least
+/// squares over the rows) within 0.2 % of the CPU's and of mu g within 1 %, the friction work
+/// within 0.5 %, the friction force mu times the normal one; and the same bits twice.
+#[test]
+fn friction_as_on_the_cpu_and_the_same_bits_twice() {
+    use friction_scenes::*;
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let decel = |rows: &[ricochet::step::Sample]| {
+        let n = rows.len() as f64;
+        let mt = rows.iter().map(|s| s.time).sum::<f64>() / n;
+        let mv = rows.iter().map(|s| s.body_velocity[0][0]).sum::<f64>() / n;
+        let (a, b) = rows.iter().fold((0.0, 0.0), |(a, b), s| {
+            let d = s.time - mt;
+            (a + d * (s.body_velocity[0][0] - mv), b + d * d)
+        });
+        -a / b
+    };
+    let ratio = |rows: &[ricochet::step::Sample]| {
+        let (ft, fy) = rows[1..].iter().fold((0.0, 0.0), |(a, b), s| {
+            (a + s.contacts[0].ft.abs(), b + s.contacts[0].force[1].abs())
+        });
+        ft / fy
+    };
+    let bits = |rows: &[ricochet::step::Sample]| -> Vec<u64> {
+        rows.iter()
+            .flat_map(|s| {
+                [
+                    s.kinetic,
+                    s.friction,
+                    s.contact,
+                    s.contacts[0].ft,
+                    s.contacts[0].force[1],
+                ]
+            })
+            .map(f64::to_bits)
+            .collect()
+    };
+    for (name, text) in [
+        ("floor", block_on_floor(1.0e-3)),
+        ("block", block_on_block(1.0e-3)),
+    ] {
+        let (sc, sg, _, _, _, _) = both(ctx.clone(), &text, name, None);
+        let (_, sg2, _, _, _, _) = both(ctx.clone(), &text, name, None);
+        assert_eq!(sc.len(), sg.len(), "{name}: rows");
+        let (ac, ag) = (decel(&sc), decel(&sg));
+        let (wc, wg) = (sc.last().unwrap().friction, sg.last().unwrap().friction);
+        eprintln!(
+            "{name}: deceleration {ag:.3} m/s^2 (CPU {ac:.3}), friction work {wg:.6} (CPU {wc:.6}), ft / fy {:.4} (CPU {:.4})",
+            ratio(&sg),
+            ratio(&sc)
+        );
+        assert!(wc > 0.1, "{name}: friction work {wc}");
+        assert!(
+            (ag / ac - 1.0).abs() < 2e-3,
+            "{name}: deceleration {ag} against {ac}"
+        );
+        assert!(
+            (ag / (MU * G) - 1.0).abs() < 0.01,
+            "{name}: deceleration {ag}"
+        );
+        assert!(
+            (wg / wc - 1.0).abs() < 5e-3,
+            "{name}: friction work {wg} against {wc}"
+        );
+        assert!(
+            (ratio(&sg) / MU - 1.0).abs() < 0.01,
+            "{name}: ft / fy {}",
+            ratio(&sg)
+        );
+        assert!(bits(&sg) == bits(&sg2), "{name}: two GPU runs differ");
+    }
+}
+
 /// Gravity on the device (the `loads` variant of the node stage, its work with the pressure's):
 /// the free fall as on the CPU; the block resting on a rigid wall held by its weight (its
 /// displacements, a few nm, are too small for the parity's relative bound in f32).

@@ -20,9 +20,9 @@ pub struct ContactSample {
     pub max_penetration: f64,
     /// Slave nodes with a non-zero impulse at the sample step.
     pub active_nodes: u32,
-    /// Friction force, averaged as `force`: the sum of each constraint's tangential impulse
-    /// along its tangent t = (-n_y, n_x) (for a wall, along the wall's t), with the sign of
-    /// `force` (included in `force` too).
+    /// Friction force, averaged as `force`: the sum of the constraints' friction impulses, each
+    /// along its slave's tangent t = (-n_y, n_x), n the normal the slave is pushed along (for a
+    /// wall, along the wall's t; both passes of a pair count alike). Its vector is in `force`.
     pub ft: f64,
 }
 
@@ -65,7 +65,7 @@ impl ContactSet {
                 let t = c.tangent();
                 i.step_impulse[0] += c.sign * c.lt * t[0];
                 i.step_impulse[1] += c.sign * c.lt * t[1];
-                i.tangential += c.sign * c.lt;
+                i.tangential += c.lt;
             }
             if c.lambda > 0.0 {
                 i.step_impulse[0] += c.sign * c.lambda * c.n[0];

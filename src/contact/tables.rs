@@ -26,6 +26,8 @@ pub struct SlotTable {
     pub point: [f64; 2],
     /// Wall penalty stiffness of the node.
     pub stiffness: f64,
+    /// Coulomb friction coefficient of the slot's contact or wall.
+    pub friction: f64,
     /// The slot's pass (index in pass order), `u32::MAX` for a wall.
     pub pass: u32,
     /// The slave node's body (for a wall, the node's body).
@@ -92,6 +94,7 @@ impl ContactSet {
                     normal: [0.0; 2],
                     point: [0.0; 2],
                     stiffness: 0.0,
+                    friction: p.friction,
                     pass: pi as u32,
                     body: p.slave_body[si],
                     group: p.group,
@@ -123,6 +126,7 @@ impl ContactSet {
                     normal: w.normal,
                     point: w.point,
                     stiffness: w.stiffness[idx],
+                    friction: w.friction,
                     pass: u32::MAX,
                     body: w.body[idx],
                     group: false,

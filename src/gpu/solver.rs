@@ -126,13 +126,6 @@ impl GpuSolver {
         fused: Option<bool>,
         contact: ContactOptions,
     ) -> Result<Self> {
-        if model.has_friction() {
-            return Err(Error::Gpu(
-                "friction (`friction` on a [[contact]] or [[rigid_wall]]) runs on the CPU \
-                 reference only so far: use --backend cpu"
-                    .into(),
-            ));
-        }
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -486,12 +479,18 @@ impl GpuSolver {
                     x as f64
                 };
                 sample.contact = r(0);
+                // With friction: its work in word 1, and 5 words per interface (ft last).
+                let friction = c.params.friction != 0;
+                let (base, per) = if friction { (2, 5) } else { (1, 4) };
+                if friction {
+                    sample.friction = r(1);
+                }
                 sample.contacts = (0..c.names.len())
                     .map(|f| ContactSample {
-                        force: [r(1 + 4 * f), r(2 + 4 * f)],
-                        max_penetration: r(3 + 4 * f),
-                        active_nodes: r(4 + 4 * f) as u32,
-                        ft: 0.0,
+                        force: [r(base + per * f), r(base + 1 + per * f)],
+                        max_penetration: r(base + 2 + per * f),
+                        active_nodes: r(base + 3 + per * f) as u32,
+                        ft: if friction { r(base + 4 + per * f) } else { 0.0 },
                     })
                     .collect();
             }

@@ -87,7 +87,7 @@ pub struct ContactParams {
     pub jp_rounds: u32,
     pub colors_recorded: u32,
     pub tolerance: f32,
-    pub _p0: u32,
+    pub friction: u32,
     pub o_bcount: u32,
     pub o_boff: u32,
     pub o_bcur: u32,
@@ -105,7 +105,7 @@ pub struct ContactParams {
     pub o_iface: u32,
     pub o_act: u32,
     pub o_mask: u32,
-    pub _p1: u32,
+    pub f_rf: u32,
     pub _p2: u32,
     pub _p3: u32,
     pub f_box: u32,
@@ -154,7 +154,7 @@ pub struct GpuSlot {
     pub k: f32,
     pub pass: u32,
     pub body: u32,
-    pub _pad: u32,
+    pub mu: f32,
 }
 
 /// Mirror of WGSL `Segment`.
@@ -170,7 +170,7 @@ pub struct GpuSegment {
 }
 
 /// Size of WGSL `Cons` (scratch only).
-pub const CONS_SIZE: u64 = 48;
+pub const CONS_SIZE: u64 = 64;
 
 const _: () = assert!(std::mem::size_of::<ContactParams>() == 160);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 64);
@@ -349,6 +349,8 @@ fn layout_workspace(p: &mut ContactParams) -> Workspace {
     p.f_usearch = ftake(nl);
     p.f_rp = ftake(ns);
     p.f_wp = ftake(nl.div_ceil(CG));
+    // Friction partials per slot run (force along the tangents, work, its part after t_n).
+    p.f_rf = if p.friction != 0 { ftake(ns) } else { 0 };
     Workspace { words, vec4s: f }
 }
 
@@ -468,7 +470,7 @@ impl ContactState {
                 k: s.stiffness as f32,
                 pass: s.pass,
                 body: s.body,
-                _pad: 0,
+                mu: s.friction as f32,
             })
             .collect();
         let segs: Vec<GpuSegment> = t
@@ -506,7 +508,10 @@ impl ContactState {
                 "contact slots are not grouped by interface".into(),
             ));
         }
-        let hist_stride = 1 + 4 * ni;
+        // Words per history row: the contact energy, with friction the friction work, then per
+        // interface fx, fy, the largest penetration, the active nodes and with friction ft.
+        let friction = t.slots.iter().any(|s| s.friction > 0.0);
+        let hist_stride = if friction { 2 + 5 * ni } else { 1 + 4 * ni };
         let n_slots = slots.len() as u32;
         let n_segs = segs.len() as u32;
         let cand_capacity = candidate_capacity.unwrap_or((4 * n_slots).max(1024)).max(1);
@@ -530,6 +535,7 @@ impl ContactState {
             jp_rounds: FIRST_ROUNDS,
             colors_recorded: if multi { 8 } else { 0 },
             tolerance: (solve::TOLERANCE * t.margin) as f32,
+            friction: u32::from(friction),
             ..Default::default()
         };
         let work = layout_workspace(&mut params);

@@ -1,0 +1,93 @@
+//! Coulomb friction with Lagrange contact on the CPU reference (the verification cases of
+//! `assets/verification/` cover the floor: sliding to rest, the incline, rolling): a block
+//! sliding on a second, clamped block through node-to-segment contact decelerates at mu g as on
+//! a rigid floor, its friction work is the kinetic energy it loses, and the history has the
+//! `friction_work` and `<name>.ft` columns.
+
+use ricochet::run::{run, schedule};
+use ricochet::step::cpu::CpuSolver;
+
+use crate::common::*;
+
+#[path = "../shared/friction_scenes.rs"]
+mod scenes;
+use scenes::*;
+
+/// (time, block velocity, friction work, ft, fy of the first contact) per row, and the balance.
+fn rows(text: &str, name: &str) -> (Vec<(f64, f64, f64, f64, f64)>, f64, f64) {
+    let (sc, model, plan) = build(text);
+    let dir = tmp_dir(name);
+    let mut solver = CpuSolver::new(model.clone(), plan.clone(), schedule(&sc));
+    let r = run(&sc, &model, &plan, &mut solver, &dir, None).expect("run");
+    let header = std::fs::read_to_string(dir.join("history.csv")).expect("history");
+    let header = header.lines().next().unwrap_or_default().to_string();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(r.summary.status, "completed", "{}", r.summary.message);
+    assert!(
+        header.contains(",contact_energy,friction_work,"),
+        "{header}"
+    );
+    assert!(header.contains(".ft"), "{header}");
+    let out = r
+        .samples
+        .iter()
+        .map(|(s, _)| {
+            (
+                s.time,
+                s.body_velocity[0][0],
+                s.friction,
+                s.contacts[0].ft,
+                s.contacts[0].force[1],
+            )
+        })
+        .collect();
+    (out, r.summary.max_energy_error, model.bodies[0].mass)
+}
+
+#[test]
+fn a_block_sliding_on_a_clamped_block_decelerates_at_mu_g() {
+    for (name, text) in [
+        ("floor", block_on_floor(2.0e-3)),
+        ("block", block_on_block(2.0e-3)),
+    ] {
+        let (rows, balance, mass) = rows(&text, &format!("friction-{name}"));
+        // Least-squares deceleration over the run.
+        let n = rows.len() as f64;
+        let mt = rows.iter().map(|r| r.0).sum::<f64>() / n;
+        let mv = rows.iter().map(|r| r.1).sum::<f64>() / n;
+        let (num, den) = rows.iter().fold((0.0, 0.0), |(a, b), r| {
+            (a + (r.0 - mt) * (r.1 - mv), b + (r.0 - mt) * (r.0 - mt))
+        });
+        let a = num / den;
+        // The friction work is the kinetic energy the block lost (the base barely moves).
+        let last = rows.last().expect("rows");
+        let lost = 0.5 * mass * (1.0 - last.1 * last.1);
+        // The friction force is mu times the normal force, against the motion, over the rows in
+        // contact (averaged over the run: the normal force rings under the sudden weight).
+        let (ft, fy): (f64, f64) = rows[1..]
+            .iter()
+            .fold((0.0, 0.0), |(a, b), r| (a + r.3.abs(), b + r.4.abs()));
+        eprintln!(
+            "{name}: deceleration {a:.2} m/s^2 (mu g {:.2}), friction work {:.5} J/m against the \
+             lost kinetic energy {lost:.5}, ft / fy {:.4}, balance {balance:.1e}",
+            MU * G,
+            last.2,
+            ft / fy
+        );
+        assert!(
+            (-a / (MU * G) - 1.0).abs() < 0.01,
+            "{name}: deceleration {a}"
+        );
+        assert!(
+            (last.2 / lost - 1.0).abs() < 0.02,
+            "{name}: friction work {}",
+            last.2
+        );
+        assert!(
+            (ft / fy / MU - 1.0).abs() < 0.01,
+            "{name}: ft / fy {}",
+            ft / fy
+        );
+        assert!(balance < 1e-6, "{name}: energy balance {balance:e}");
+    }
+}
