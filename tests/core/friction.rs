@@ -13,8 +13,11 @@ use crate::common::*;
 mod scenes;
 use scenes::*;
 
-/// (time, block velocity, friction work, ft, fy of the first contact) per row, and the balance.
-fn rows(text: &str, name: &str) -> (Vec<(f64, f64, f64, f64, f64)>, f64, f64) {
+/// A history row: time, block velocity, friction work, ft and fy of the first contact.
+type Row = (f64, f64, f64, f64, f64);
+
+/// The rows of a CPU run of `text`, its energy balance and the block's mass.
+fn rows(text: &str, name: &str) -> (Vec<Row>, f64, f64) {
     let (sc, model, plan) = build(text);
     let dir = tmp_dir(name);
     let mut solver = CpuSolver::new(model.clone(), plan.clone(), schedule(&sc));
