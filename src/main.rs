@@ -912,6 +912,17 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             ),
             None => println!("  lagrange no effect on the stable step"),
         }
+        let friction: Vec<String> = model
+            .contacts
+            .iter()
+            .map(|c| (&c.name, c.friction))
+            .chain(model.walls.iter().map(|w| (&w.name, w.friction)))
+            .filter(|(_, mu)| *mu > 0.0)
+            .map(|(n, mu)| format!("{n} mu = {mu}"))
+            .collect();
+        if !friction.is_empty() {
+            println!("  friction Coulomb (Lagrange): {}", friction.join(", "));
+        }
         let overlaps = &model.initial_overlaps;
         if overlaps.is_empty() {
             println!("  overlaps none at t = 0");
@@ -982,6 +993,18 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             p.value,
             p.edges,
             p.nodes.len()
+        );
+    }
+    if model.gravity != [0.0; 2] {
+        println!(
+            "gravity    [{:e}, {:e}] m/s^2 on every node{}",
+            model.gravity[0],
+            model.gravity[1],
+            if model.gravity_ramp > 0.0 {
+                format!(", ramped in over {:e} s", model.gravity_ramp)
+            } else {
+                String::new()
+            }
         );
     }
     if model.mass_damping > 0.0 {

@@ -94,3 +94,27 @@ fn a_block_sliding_on_a_clamped_block_decelerates_at_mu_g() {
         assert!(balance < 1e-6, "{name}: energy balance {balance:e}");
     }
 }
+
+#[test]
+fn check_prints_the_friction_and_the_gravity() {
+    let dir = tmp_dir("friction-check");
+    let file = dir.join("block.toml");
+    std::fs::write(
+        &file,
+        block_on_block(1.0e-3).replace("gravity = [", "gravity_ramp = 1.0e-4\ngravity = ["),
+    )
+    .expect("write");
+    let o = run_bin(&["check", file.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(o.status.code(), Some(0), "{out}");
+    assert!(
+        out.contains("friction Coulomb (Lagrange): sliding mu = 0.3"),
+        "{out}"
+    );
+    assert!(
+        out.contains("gravity    [0e0, -9.81e2] m/s^2 on every node, ramped in over 1e-4 s"),
+        "{out}"
+    );
+    assert!(out.contains("-> gravity ->"), "{out}");
+}
