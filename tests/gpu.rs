@@ -327,34 +327,9 @@ fn element_kernel_passes_the_patch_test_on_the_mixed_gmsh_mesh() {
                 cpu.dt
             );
         }
-        // Boundary edges (used by one element; a triangle's collapsed side is none): the
-        // consistent traction t sigma n, half to each end; interior nodes get nothing.
-        let mut count = std::collections::HashMap::new();
-        for q in &model.quads {
-            for a in 0..4 {
-                let (i, j) = (q[a], q[(a + 1) % 4]);
-                if i != j {
-                    *count.entry((i.min(j), i.max(j))).or_insert(0) += 1;
-                }
-            }
-        }
-        let mut expected = vec![[0.0f64; 2]; model.node_count()];
-        for q in &model.quads {
-            for a in 0..4 {
-                let (i, j) = (q[a], q[(a + 1) % 4]);
-                if i == j || count[&(i.min(j), i.max(j))] != 1 {
-                    continue;
-                }
-                let (pi, pj) = (model.position[i as usize], model.position[j as usize]);
-                let n = [pj[1] - pi[1], -(pj[0] - pi[0])];
-                for k in [i, j] {
-                    for c in 0..2 {
-                        expected[k as usize][c] -=
-                            0.5 * t * (sigma[c][0] * n[0] + sigma[c][1] * n[1]);
-                    }
-                }
-            }
-        }
+        // The consistent traction t sigma n on the boundary edges, half to each end; interior
+        // nodes get nothing.
+        let expected = traction::traction_forces(&model, sigma, t);
         let f_scale = scale * t * 1.0;
         for (i, (f, w)) in node_force.iter().zip(&expected).enumerate() {
             let d = (f[0] - w[0]).hypot(f[1] - w[1]) / f_scale;
@@ -662,6 +637,9 @@ mod gravity_scene;
 #[path = "shared/friction_scenes.rs"]
 mod friction_scenes;
 
+#[path = "shared/traction.rs"]
+mod traction;
+
 /// Coulomb friction on the device (the tangential update in the Lagrange sweeps, its work and
 /// force in the reports): the block sliding on a rigid floor and on a clamped block
 /// (node-to-segment, both passes), as on the CPU. The floor nodes chatter under the suddenly
@@ -675,14 +653,11 @@ fn friction_as_on_the_cpu_and_the_same_bits_twice() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let decel = |rows: &[ricochet::step::Sample]| {
-        let n = rows.len() as f64;
-        let mt = rows.iter().map(|s| s.time).sum::<f64>() / n;
-        let mv = rows.iter().map(|s| s.body_velocity[0][0]).sum::<f64>() / n;
-        let (a, b) = rows.iter().fold((0.0, 0.0), |(a, b), s| {
-            let d = s.time - mt;
-            (a + d * (s.body_velocity[0][0] - mv), b + d * d)
-        });
-        -a / b
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .map(|s| (s.time, s.body_velocity[0][0]))
+            .collect();
+        -ricochet::verify::metric::line_fit(&points).expect("rows").0
     };
     let ratio = |rows: &[ricochet::step::Sample]| {
         let (ft, fy) = rows[1..].iter().fold((0.0, 0.0), |(a, b), s| {

@@ -145,7 +145,7 @@ pub struct RunData<'a> {
 
 /// The least-squares line through `points` (t, v): its slope and its value at the mean t;
 /// `None` for fewer than two distinct times.
-fn line_fit(points: &[(f64, f64)]) -> Option<(f64, f64)> {
+pub fn line_fit(points: &[(f64, f64)]) -> Option<(f64, f64)> {
     let n = points.len() as f64;
     if points.len() < 2 {
         return None;

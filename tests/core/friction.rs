@@ -55,13 +55,8 @@ fn a_block_sliding_on_a_clamped_block_decelerates_at_mu_g() {
     ] {
         let (rows, balance, mass) = rows(&text, &format!("friction-{name}"));
         // Least-squares deceleration over the run.
-        let n = rows.len() as f64;
-        let mt = rows.iter().map(|r| r.0).sum::<f64>() / n;
-        let mv = rows.iter().map(|r| r.1).sum::<f64>() / n;
-        let (num, den) = rows.iter().fold((0.0, 0.0), |(a, b), r| {
-            (a + (r.0 - mt) * (r.1 - mv), b + (r.0 - mt) * (r.0 - mt))
-        });
-        let a = num / den;
+        let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.0, r.1)).collect();
+        let a = ricochet::verify::metric::line_fit(&points).expect("rows").0;
         // The friction work is the kinetic energy the block lost (the base barely moves).
         let last = rows.last().expect("rows");
         let lost = 0.5 * mass * (1.0 - last.1 * last.1);

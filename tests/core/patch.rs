@@ -5,13 +5,14 @@
 //! MacNeal-Harder patch, and for both plane strain and plane stress; plus the neo-Hookean
 //! analogue with a large homogeneous deformation.
 
-use std::collections::HashMap;
-
-use ricochet::model::Model;
 use ricochet::scene::{Formulation, HourglassForm, MaterialModel};
 use ricochet::step::element::{evaluate, Dissipation};
 
 use crate::common::*;
+
+#[path = "../shared/traction.rs"]
+mod traction;
+use traction::{interior, traction_forces};
 
 /// Displacement gradient of the imposed field (its skew part is an infinitesimal rotation, which
 /// small-strain elasticity ignores): eps_xx = 1e-3, eps_yy = -5e-4, eps_xy = 1e-4.
@@ -132,58 +133,6 @@ hourglass = {{ form = "{hourglass}", coefficient = 0.1 }}
         nodes.join(", "),
         quads.join(", ")
     )
-}
-
-/// Number of elements sharing each edge (1 on the boundary); a triangle's collapsed side
-/// (`[a, b, c, c]`) is no edge.
-fn edge_count(model: &Model) -> HashMap<(u32, u32), usize> {
-    let mut count: HashMap<(u32, u32), usize> = HashMap::new();
-    for q in &model.quads {
-        for a in 0..4 {
-            let (i, j) = (q[a], q[(a + 1) % 4]);
-            if i == j {
-                continue;
-            }
-            *count.entry((i.min(j), i.max(j))).or_default() += 1;
-        }
-    }
-    count
-}
-
-/// Expected nodal forces of a constant first Piola-Kirchhoff stress `p` (row-major 2x2) on the
-/// reference patch: on each boundary edge i -> j (counter-clockwise) with outward normal times
-/// length N, the traction resultant t p N, split half and half between i and j; the element
-/// forces are external minus internal, so minus that. Interior nodes get zero.
-fn traction_forces(model: &Model, p: [[f64; 2]; 2], t: f64) -> Vec<[f64; 2]> {
-    let count = edge_count(model);
-    let mut f = vec![[0.0; 2]; model.node_count()];
-    for q in &model.quads {
-        for a in 0..4 {
-            let (i, j) = (q[a], q[(a + 1) % 4]);
-            if i == j || count[&(i.min(j), i.max(j))] != 1 {
-                continue;
-            }
-            let (pi, pj) = (model.position[i as usize], model.position[j as usize]);
-            let tr = mat_vec(p, [pj[1] - pi[1], -(pj[0] - pi[0])]);
-            for k in [i, j] {
-                f[k as usize][0] -= 0.5 * t * tr[0];
-                f[k as usize][1] -= 0.5 * t * tr[1];
-            }
-        }
-    }
-    f
-}
-
-fn interior(model: &Model) -> Vec<usize> {
-    let count = edge_count(model);
-    let mut boundary = vec![false; model.node_count()];
-    for ((i, j), c) in count {
-        if c == 1 {
-            boundary[i as usize] = true;
-            boundary[j as usize] = true;
-        }
-    }
-    (0..model.node_count()).filter(|&i| !boundary[i]).collect()
 }
 
 /// Imposes u = F X - X + SHIFT (F = I + grad) on the patch and checks stress and forces.
