@@ -139,9 +139,10 @@ struct Cons {
     pen: f32,             // penalty: penetration at u_n
     dt_warm: f32,         // dt_n of the step that found lambda (Lagrange: the next step's warm start)
     mu: f32,              // Coulomb coefficient (0: frictionless)
-    wt: f32,              // (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along t = (-n_y, n_x)
+    wt: f32,              // (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along t = (-n_y, n_x); penalty
+                          // before its friction: the spring stiffness
     lt: f32,              // friction impulse along t, |lt| <= mu lambda
-    _p0: f32,
+    ft: f32,              // penalty friction: the tangential spring force, kept for the next step
 }
 
 @group(0) @binding(1) var<storage, read_write> ctrl: Control;

@@ -123,7 +123,35 @@ fn no_constraint() -> Cons {
     c.mu = 0.0;
     c.wt = 0.0;
     c.lt = 0.0;
-    c._p0 = 0.0;
+    c.ft = 0.0;
+    return c;
+}
+
+// Penalty friction (CPU: ContactSet::penalty_friction, the Curnier-Mroz regularization): a
+// tangential spring of the normal spring's stiffness (c.wt on entry), its force `old.ft` of the
+// slot's last step incremented by -k dt v_t and returned onto |f_t| <= mu lambda / dt_n.
+fn penalty_friction(c0: Cons, sl: Slot, old: Cons, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
+    var c = c0;
+    let k = c.wt;
+    c.wt = 0.0;
+    let t = tangent(c);
+    var wt = along(sl.s, t, inv_scale);
+    if (c.a != NONE) {
+        wt += (1.0 - c.xi) * (1.0 - c.xi) * along(c.a, t, inv_scale) + c.xi * c.xi * along(c.b, t, inv_scale);
+    }
+    if (!(wt > 0.0) || !(c.lambda > 0.0) || !(dtn > 0.0)) {
+        return c;
+    }
+    var prev = 0.0;
+    if (old.kind == KIND_PENALTY) {
+        prev = old.ft;
+    }
+    let limit = sl.mu * c.lambda / dtn;
+    let ft = clamp(prev - k * dt * free_relative_along(c, sl.s, t), -limit, limit);
+    c.mu = sl.mu;
+    c.wt = wt;
+    c.lt = dtn * ft;
+    c.ft = ft;
     return c;
 }
 
@@ -227,6 +255,7 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
         c.lambda = penalty_impulse(sg.k, best_gap, rate, g_trial, w, dt, dtn);
         c.pen = -best_gap;
         c.kind = KIND_PENALTY;
+        c.wt = sg.k;
     }
     return c;
 }
@@ -256,6 +285,7 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
         c.lambda = penalty_impulse(sl.k, g, rate, g_tr, w, dt, dtn);
         c.pen = -g;
         c.kind = KIND_PENALTY;
+        c.wt = sl.k;
     }
     return c;
 }
@@ -280,6 +310,10 @@ fn narrow(@builtin(global_invocation_id) gid: vec3<u32>) {
     let dtn = ctrl.dt_node;
     var c = narrow_slot(k, dt, dtn, inv_mass_scale());
     let old = cons[k];
+    let sl = slots[k];
+    if (c.kind == KIND_PENALTY && sl.mu > 0.0) {
+        c = penalty_friction(c, sl, old, dt, dtn, inv_mass_scale());
+    }
     if (c.kind == KIND_LAGRANGE && old.kind == KIND_LAGRANGE && old.lambda > 0.0 && old.dt_warm > 0.0) {
         c.lambda = old.lambda * (dtn / old.dt_warm);
     }
@@ -316,7 +350,8 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
         } else if (c.b == i) {
             share = -c.xi;
         }
-        d += share * c.lambda * inv_scale * c.n;
+        // (Penalty friction: its tangential impulse too; 0 for a warm start.)
+        d += share * inv_scale * (c.lambda * c.n + c.lt * tangent(c));
     }
     c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, d * c_ref[i].zw);
 }

@@ -85,7 +85,7 @@ fn slot_report(k: u32, dt: f32) -> vec4<f32> {
     if (c.lambda > 0.0) {
         r = vec4<f32>(c.sign * c.lambda * c.n, 1.0, 0.0);
     }
-    if (c.kind == KIND_LAGRANGE && c.lt != 0.0) {
+    if (c.lt != 0.0) {
         r = vec4<f32>(r.xy + c.sign * c.lt * tangent(c), r.zw);
     }
     if (c.kind == KIND_PENALTY) {
@@ -101,7 +101,7 @@ fn slot_report(k: u32, dt: f32) -> vec4<f32> {
 // m dv_friction per node), the part after t_n, 0). After `finish`: c_pv[3i + 2].xy is v^{n+1/2}.
 fn slot_friction(k: u32) -> vec4<f32> {
     let c = cons[k];
-    if (c.kind != KIND_LAGRANGE || c.lt == 0.0) {
+    if (c.kind == KIND_NONE || c.lt == 0.0) {
         return vec4<f32>(0.0);
     }
     let t = tangent(c);

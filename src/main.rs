@@ -915,13 +915,19 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
         let friction: Vec<String> = model
             .contacts
             .iter()
-            .map(|c| (&c.name, c.friction))
-            .chain(model.walls.iter().map(|w| (&w.name, w.friction)))
-            .filter(|(_, mu)| *mu > 0.0)
-            .map(|(n, mu)| format!("{n} mu = {mu}"))
+            .map(|c| (&c.name, c.friction, c.method))
+            .chain(model.walls.iter().map(|w| (&w.name, w.friction, w.method)))
+            .filter(|(_, mu, _)| *mu > 0.0)
+            .map(|(n, mu, m)| {
+                let how = match m {
+                    ricochet::scene::ContactMethod::Lagrange => "lagrange",
+                    ricochet::scene::ContactMethod::Penalty => "penalty, regularized",
+                };
+                format!("{n} mu = {mu} ({how})")
+            })
             .collect();
         if !friction.is_empty() {
-            println!("  friction Coulomb (Lagrange): {}", friction.join(", "));
+            println!("  friction Coulomb: {}", friction.join(", "));
         }
         let overlaps = &model.initial_overlaps;
         if overlaps.is_empty() {

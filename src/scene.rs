@@ -1086,20 +1086,9 @@ impl Validator<'_> {
         }
     }
 
-    /// The Coulomb coefficient `friction` of a contact or wall: finite and >= 0, and only with a
-    /// method that carries it (Lagrange; the penalty's Curnier-Mroz law is not built yet).
-    fn friction(&self, key: &str, mu: Option<f64>, method: ContactMethod) -> Result<f64> {
-        let Some(mu) = mu else { return Ok(0.0) };
-        let mu = self.non_negative(key, mu)?;
-        if mu > 0.0 && method != ContactMethod::Lagrange {
-            return Err(self.invalid(
-                key,
-                fmt_num(mu),
-                "friction is carried by method = \"lagrange\" only so far (the penalty \
-                 method's regularized friction is not built yet)",
-            ));
-        }
-        Ok(mu)
+    /// The Coulomb coefficient `friction` of a contact or wall: finite and >= 0.
+    fn friction(&self, key: &str, mu: Option<f64>) -> Result<f64> {
+        mu.map_or(Ok(0.0), |mu| self.non_negative(key, mu))
     }
 
     fn contact(&self, key: &str, c: &RawContact, bodies: &[Body]) -> Result<Contact> {
@@ -1232,7 +1221,7 @@ impl Validator<'_> {
             two_pass: group || c.two_pass.unwrap_or(true),
             penalty_scale,
             surfaces,
-            friction: self.friction(&format!("{key}.friction"), c.friction, method)?,
+            friction: self.friction(&format!("{key}.friction"), c.friction)?,
         })
     }
 
@@ -1288,7 +1277,7 @@ impl Validator<'_> {
             bodies: list,
             method,
             penalty_scale,
-            friction: self.friction(&format!("{key}.friction"), w.friction, method)?,
+            friction: self.friction(&format!("{key}.friction"), w.friction)?,
         })
     }
 

@@ -680,8 +680,10 @@ fn friction_as_on_the_cpu_and_the_same_bits_twice() {
             .collect()
     };
     for (name, text) in [
-        ("floor", block_on_floor(1.0e-3)),
-        ("block", block_on_block(1.0e-3)),
+        ("floor", block_on_floor(1.0e-3, "lagrange")),
+        ("block", block_on_block(1.0e-3, "lagrange")),
+        ("floor, penalty", block_on_floor(1.0e-3, "penalty")),
+        ("block, penalty", block_on_block(1.0e-3, "penalty")),
     ] {
         let (sc, sg, _, _, _, _) = both(ctx.clone(), &text, name, None);
         let (_, sg2, _, _, _, _) = both(ctx.clone(), &text, name, None);

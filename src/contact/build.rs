@@ -244,6 +244,8 @@ impl ContactSet {
             dt: 0.0,
             v_free: vec![[0.0; 2]; n],
             dv: vec![[0.0; 2]; n],
+            pen_ft: Vec::new(),
+            pen_ft_next: Vec::new(),
             dvt: if model.contacts.iter().any(|c| c.friction > 0.0)
                 || model.walls.iter().any(|w| w.friction > 0.0)
             {

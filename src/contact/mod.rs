@@ -190,6 +190,13 @@ pub struct ContactSet {
     /// and that step's dt_n: the next step's projected Gauss-Seidel starts from them.
     warm: Vec<([u32; 2], f64)>,
     warm_dt: f64,
+    /// Penalty friction: the tangential spring force of each constraint (interface, slave node)
+    /// at the last step, sorted (Curnier-Mroz: its elastic stick carried from step to step).
+    #[serde(default)]
+    pen_ft: Vec<([u32; 2], f64)>,
+    /// Scratch: this step's, to become `pen_ft`.
+    #[serde(default)]
+    pen_ft_next: Vec<([u32; 2], f64)>,
     /// v^{n-1/2} of the local nodes.
     v_old: Vec<[f64; 2]>,
     /// Positions at the last search.

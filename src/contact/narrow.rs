@@ -230,6 +230,7 @@ impl ContactSet {
     /// The constraints of the passes' slave nodes; with `skip` (a re-check, see `recheck`),
     /// Lagrange passes only, and not the nodes that have one (sorted `warm_key`s).
     pub(super) fn collect_passes(&mut self, dt: f64, dt_n: f64, skip: Option<&[[u32; 2]]>) {
+        let mut springs = std::mem::take(&mut self.pen_ft_next);
         for pi in 0..self.passes.len() {
             let p = &self.passes[pi];
             if skip.is_some() && p.method != ContactMethod::Lagrange {
@@ -328,14 +329,55 @@ impl ContactSet {
                     c.lambda = penalty_impulse(p.stiffness[j], pr.gap, rate, g_trial, w, dt, dt_n);
                     c.penetration = -pr.gap;
                     c.w = -w;
+                    if p.friction > 0.0 {
+                        let k = p.stiffness[j];
+                        self.penalty_friction(&mut c, k, p.friction, dt, dt_n, &mut springs);
+                    }
                 }
                 self.cons.push(c);
             }
         }
+        self.pen_ft_next = springs;
+    }
+
+    /// Penalty friction (the Curnier-Mroz regularization of Coulomb's law): a tangential spring
+    /// of the normal spring's stiffness `k` at the contact point, its force carried from the
+    /// last step and incremented by -k dt v_t (the relative tangential velocity of the free
+    /// update), returned onto the slip limit |f_t| <= mu f_n, f_n = lambda / dt_n the normal
+    /// spring's force; its impulse dt_n f_t goes into `c.lt`, the force into `springs` (for
+    /// the next step). A constraint without a spring last step starts from 0.
+    fn penalty_friction(
+        &self,
+        c: &mut Constraint,
+        k: f64,
+        mu: f64,
+        dt: f64,
+        dt_n: f64,
+        springs: &mut Vec<([u32; 2], f64)>,
+    ) {
+        let t = c.tangent();
+        let ab = (c.a != u32::MAX).then_some((c.a, c.b));
+        let wt = self.weight(c.s, ab, c.xi, t, 1.0);
+        if !(wt > 0.0) || !(c.lambda > 0.0) || dt_n <= 0.0 {
+            return;
+        }
+        let key = [c.interface, c.s];
+        let prev = self
+            .pen_ft
+            .binary_search_by_key(&key, |e| e.0)
+            .map_or(0.0, |i| self.pen_ft[i].1);
+        let vt = self.free_relative(c.s, ab, c.xi, t);
+        let limit = mu * c.lambda / dt_n;
+        let ft = (prev - k * dt * vt).clamp(-limit, limit);
+        c.mu = mu;
+        c.wt = wt;
+        c.lt = dt_n * ft;
+        springs.push((key, ft));
     }
 
     /// The constraints of the walls' nodes; `skip` as for [`Self::collect_passes`].
     pub(super) fn collect_walls(&mut self, dt: f64, dt_n: f64, skip: Option<&[[u32; 2]]>) {
+        let mut springs = std::mem::take(&mut self.pen_ft_next);
         for wi in 0..self.walls.len() {
             let w = &self.walls[wi];
             if skip.is_some() && w.method != ContactMethod::Lagrange {
@@ -389,11 +431,16 @@ impl ContactSet {
                             penalty_impulse(w.stiffness[idx], g, rate, g_tr, weight, dt, dt_n);
                         c.penetration = -g;
                         c.w = -weight;
+                        if w.friction > 0.0 {
+                            let (k, mu) = (w.stiffness[idx], w.friction);
+                            self.penalty_friction(&mut c, k, mu, dt, dt_n, &mut springs);
+                        }
                     }
                 }
                 self.cons.push(c);
             }
         }
+        self.pen_ft_next = springs;
     }
 }
 

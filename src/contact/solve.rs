@@ -119,8 +119,15 @@ impl ContactSet {
             let c = self.cons[k];
             if c.w < 0.0 {
                 self.impulse(&c, c.lambda);
+                if c.lt != 0.0 {
+                    self.impulse_along(&c, c.tangent(), c.lt, true);
+                }
             }
         }
+        // The penalty friction springs of this step, for the next.
+        std::mem::swap(&mut self.pen_ft, &mut self.pen_ft_next);
+        self.pen_ft_next.clear();
+        self.pen_ft.sort_unstable_by_key(|e| e.0);
         // Lagrange: projected Gauss-Seidel in the fixed constraint order, warm-started from the
         // multipliers of the previous step (the same slave node of the same interface), scaled by
         // the ratio of the steps. In a persistent contact (a pressure carried across an

@@ -1,4 +1,4 @@
-//! Coulomb friction with Lagrange contact on the CPU reference (the verification cases of
+//! Coulomb friction with Lagrange and penalty contact on the CPU reference (the verification cases of
 //! `assets/verification/` cover the floor: sliding to rest, the incline, rolling): a block
 //! sliding on a second, clamped block through node-to-segment contact decelerates at mu g as on
 //! a rigid floor, its friction work is the kinetic energy it loses, and the history has the
@@ -50,8 +50,10 @@ fn rows(text: &str, name: &str) -> (Vec<Row>, f64, f64) {
 #[test]
 fn a_block_sliding_on_a_clamped_block_decelerates_at_mu_g() {
     for (name, text) in [
-        ("floor", block_on_floor(2.0e-3)),
-        ("block", block_on_block(2.0e-3)),
+        ("floor", block_on_floor(2.0e-3, "lagrange")),
+        ("block", block_on_block(2.0e-3, "lagrange")),
+        ("floor, penalty", block_on_floor(2.0e-3, "penalty")),
+        ("block, penalty", block_on_block(2.0e-3, "penalty")),
     ] {
         let (rows, balance, mass) = rows(&text, &format!("friction-{name}"));
         // Least-squares deceleration over the run.
@@ -96,7 +98,8 @@ fn check_prints_the_friction_and_the_gravity() {
     let file = dir.join("block.toml");
     std::fs::write(
         &file,
-        block_on_block(1.0e-3).replace("gravity = [", "gravity_ramp = 1.0e-4\ngravity = ["),
+        block_on_block(1.0e-3, "lagrange")
+            .replace("gravity = [", "gravity_ramp = 1.0e-4\ngravity = ["),
     )
     .expect("write");
     let o = run_bin(&["check", file.to_str().unwrap()]);
@@ -104,7 +107,7 @@ fn check_prints_the_friction_and_the_gravity() {
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(o.status.code(), Some(0), "{out}");
     assert!(
-        out.contains("friction Coulomb (Lagrange): sliding mu = 0.3"),
+        out.contains("friction Coulomb: sliding mu = 0.3 (lagrange)"),
         "{out}"
     );
     assert!(

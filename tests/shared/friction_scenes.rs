@@ -1,6 +1,7 @@
 //! Scenes with Coulomb friction, shared by the core and GPU suites (REFERENCES.md section 7):
 //! the steel block (20 x 10 mm, plane strain) sliding at 1 m/s under g = 981 m/s^2, on a rigid
-//! floor or on a second, clamped block (node-to-segment contact), mu = 0.3: it decelerates at
+//! floor or on a second, clamped block (node-to-segment contact), mu = 0.3, with Lagrange or
+//! penalty contact (penalty friction: the Curnier-Mroz spring): it decelerates at
 //! mu g = 294.3 m/s^2.
 
 /// Gravity (m/s^2).
@@ -8,25 +9,25 @@ pub const G: f64 = 981.0;
 /// Coulomb coefficient.
 pub const MU: f64 = 0.3;
 
-/// The block sliding at 1 m/s for `end_time` on a rigid Lagrange floor with friction.
-pub fn block_on_floor(end_time: f64) -> String {
+/// The block sliding at 1 m/s for `end_time` on a rigid floor with friction, by `method`.
+pub fn block_on_floor(end_time: f64, method: &str) -> String {
     format!(
         "{}\n[[rigid_wall]]\nname = \"floor\"\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\n\
-         method = \"lagrange\"\nfriction = {MU}\n",
+         method = \"{method}\"\nfriction = {MU}\n",
         header(end_time)
     )
 }
 
 /// The block sliding at 1 m/s for `end_time` on a 60 x 5 mm base block (10 x 2 quads) whose
-/// lower edge is clamped: two-pass Lagrange contact with friction between them.
-pub fn block_on_block(end_time: f64) -> String {
+/// lower edge is clamped: two-pass contact with friction between them, by `method`.
+pub fn block_on_block(end_time: f64, method: &str) -> String {
     format!(
         "{}\n[[body]]\nname = \"base\"\nmaterial = \"steel\"\nformulation = \"plane_strain\"\n\
          mesh = {{ rectangle = {{ origin = [-0.02, -0.005], size = [0.06, 0.005], cells = [10, 2] }} }}\n\
          hourglass = {{ form = \"stiffness\", coefficient = 0.1 }}\n\n\
          [[boundary]]\nbody = \"base\"\nregion = {{ min = [-1.0, -0.0051], max = [1.0, -0.0049] }}\n\
          velocity = {{ x = 0.0, y = 0.0 }}\n\n\
-         [[contact]]\nname = \"sliding\"\nbodies = [\"block\", \"base\"]\nmethod = \"lagrange\"\n\
+         [[contact]]\nname = \"sliding\"\nbodies = [\"block\", \"base\"]\nmethod = \"{method}\"\n\
          friction = {MU}\n",
         header(end_time)
     )
