@@ -358,7 +358,8 @@ impl ContactSet {
         let t = c.tangent();
         let ab = (c.a != u32::MAX).then_some((c.a, c.b));
         let wt = self.weight(c.s, ab, c.xi, t, 1.0);
-        if !(wt > 0.0) || !(c.lambda > 0.0) || dt_n <= 0.0 {
+        let ok = wt > 0.0 && c.lambda > 0.0 && dt_n > 0.0;
+        if !ok {
             return;
         }
         let key = [c.interface, c.s];
