@@ -32,6 +32,21 @@ mesh = {{ rectangle = {{ origin = [{origin_x:e}, 0.0], size = [0.05, 0.02], cell
     )
 }
 
+/// The steel's stress (rr, zz, rz, hoop) under the uniform expansion u_r = er r, u_z = ez z
+/// (hoop strain er), written out from E and nu.
+fn expansion_stress(er: f64, ez: f64) -> [f64; 4] {
+    let (e, nu) = (2.1e11, 0.3);
+    let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    let mu = e / (2.0 * (1.0 + nu));
+    let tr = 2.0 * er + ez;
+    [
+        lambda * tr + 2.0 * mu * er,
+        lambda * tr + 2.0 * mu * ez,
+        0.0,
+        lambda * tr + 2.0 * mu * er,
+    ]
+}
+
 #[test]
 fn a_uniform_expansion_gives_the_exact_hoop_stress_and_the_masses_are_per_radian() {
     let (_, model, _) = build(&scene(0.05, ""));
@@ -49,17 +64,7 @@ fn a_uniform_expansion_gives_the_exact_hoop_stress_and_the_masses_are_per_radian
         .iter()
         .map(|p| [er * p[0], ez * p[1]])
         .collect();
-    let e = 2.1e11;
-    let nu = 0.3;
-    let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-    let mu = e / (2.0 * (1.0 + nu));
-    let tr = 2.0 * er + ez;
-    let want = [
-        lambda * tr + 2.0 * mu * er,
-        lambda * tr + 2.0 * mu * ez,
-        0.0,
-        lambda * tr + 2.0 * mu * er,
-    ];
+    let want = expansion_stress(er, ez);
     for el in 0..model.element_count() {
         let s = element_fields(&model, &u, el).stress;
         for i in 0..4 {
@@ -102,16 +107,7 @@ fn triangles_of_a_mixed_gmsh_mesh_give_the_exact_hoop_stress_and_masses_per_radi
         .iter()
         .map(|p| [er * p[0], ez * p[1]])
         .collect();
-    let (e, nu) = (2.1e11, 0.3);
-    let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-    let mu = e / (2.0 * (1.0 + nu));
-    let tr = 2.0 * er + ez;
-    let want = [
-        lambda * tr + 2.0 * mu * er,
-        lambda * tr + 2.0 * mu * ez,
-        0.0,
-        lambda * tr + 2.0 * mu * er,
-    ];
+    let want = expansion_stress(er, ez);
     // The strain energy per radian of the triangles: w times the integral of r over them,
     // A (r_a + r_b + r_c) / 3 each, which their one point gives exactly at the centroid only.
     let w = 0.5 * (want[0] * er + want[1] * ez + want[3] * er);
