@@ -15,6 +15,7 @@ const KIND_LAGRANGE: u32 = 1u;
 const KIND_PENALTY: u32 = 2u;
 const XI_TOLERANCE: f32 = 1e-6;       // crate::contact::narrow::XI_TOLERANCE
 const TIE_TOLERANCE: f32 = 1e-4;      // crate::contact::narrow::TIE_TOLERANCE
+const STIFF_SPRING: f32 = 1.0;        // crate::contact::solve::STIFF_SPRING
 const STATE_SEARCH_GROW: u32 = 4u;    // the host grows a contact buffer and resumes the step
 
 const SLOT_PENALTY: u32 = 0x10000u;
@@ -88,7 +89,7 @@ struct ContactCtl {
     searches: u32,
     grow: atomic<u32>,        // GROW_* requests for the host
     lagrange: atomic<u32>,    // Lagrange constraints of this step
-    _reserved: u32,           // (keeps the host's offsets)
+    bounded: atomic<u32>,     // penalty impulses bounded so far (constraint-steps)
     sweeps: u32,              // sweeps of this step
     sweeps_total: u32,        // sweeps over the run (steps with Lagrange constraints)
     sweeps_max: u32,
@@ -113,6 +114,8 @@ struct Slot {
     pass_id: u32,          // pass index (walls: NONE)
     body: u32,            // the slave's body
     mu: f32,              // Coulomb coefficient of its contact or wall (0: none)
+    kt: f32,              // penalty friction: the tangential spring over the normal one
+    _pad: u32,
 }
 
 struct Segment {
@@ -137,7 +140,8 @@ struct Cons {
     w: f32,               // dt (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along n
     lambda: f32,
     pen: f32,             // penalty: penetration at u_n
-    dt_warm: f32,         // dt_n of the step that found lambda (Lagrange: the next step's warm start)
+    dt_warm: f32,         // dt_n of the step that found lambda (Lagrange: the next step's warm
+                          // start); penalty: -1 where the bound acted, else 0
     mu: f32,              // Coulomb coefficient (0: frictionless)
     wt: f32,              // (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along t = (-n_y, n_x); penalty
                           // before its friction: the spring stiffness

@@ -27,13 +27,19 @@ fn line_gap(d: vec2<f32>, t: vec2<f32>) -> f32 {
     return 0.0;
 }
 
-fn penalty_impulse(k: f32, g: f32, rate: f32, g_trial: f32, w: f32, dt: f32, dtn: f32) -> f32 {
+// (impulse, 1 if the bound acted) (crate::contact::penalty_impulse): the spring unchanged while
+// it is soft for the step ((omega dt)^2 = k dtn w <= STIFF_SPRING), else bounded by the perfectly
+// plastic impulse.
+fn penalty_impulse(k: f32, g: f32, rate: f32, g_trial: f32, w: f32, dt: f32, dtn: f32) -> vec2<f32> {
     let spring = dtn * k * max(-g, 0.0);
+    if (k * dtn * w <= STIFF_SPRING) {
+        return vec2<f32>(spring, 0.0);
+    }
     var bound = max(-g_trial / w, 0.0);
     if (rate < 0.0) {
         bound = -rate * dt / w;
     }
-    return min(spring, bound);
+    return vec2<f32>(min(spring, bound), select(0.0, 1.0, bound < spring));
 }
 
 // A candidate segment of a slave node (crate::contact::narrow::qualify): whether the node is in
@@ -128,11 +134,11 @@ fn no_constraint() -> Cons {
 }
 
 // Penalty friction (CPU: ContactSet::penalty_friction, the Curnier-Mroz regularization): a
-// tangential spring of the normal spring's stiffness (c.wt on entry), its force `old.ft` of the
+// tangential spring of the normal spring's stiffness (c.wt on entry) times sl.kt, its force `old.ft` of the
 // slot's last step incremented by -k dt v_t and returned onto |f_t| <= mu lambda / dt_n.
 fn penalty_friction(c0: Cons, sl: Slot, old: Cons, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
     var c = c0;
-    let k = c.wt;
+    let k = c.wt * sl.kt;
     c.wt = 0.0;
     let t = tangent(c);
     var wt = along(sl.s, t, inv_scale);
@@ -252,7 +258,9 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
         let rate = dot(vs, best_n)
             - ((1.0 - best_xi) * dot(vel(sg.a).xy, best_n) + best_xi * dot(vel(sg.b).xy, best_n));
         let g_trial = best_gap + dt * rate;
-        c.lambda = penalty_impulse(sg.k, best_gap, rate, g_trial, w, dt, dtn);
+        let imp = penalty_impulse(sg.k, best_gap, rate, g_trial, w, dt, dtn);
+        c.lambda = imp.x;
+        c.dt_warm = -imp.y;
         c.pen = -best_gap;
         c.kind = KIND_PENALTY;
         c.wt = sg.k;
@@ -282,7 +290,9 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
         }
     } else if (g < 0.0) {
         let rate = dot(vel(s).xy, n);
-        c.lambda = penalty_impulse(sl.k, g, rate, g_tr, w, dt, dtn);
+        let imp = penalty_impulse(sl.k, g, rate, g_tr, w, dt, dtn);
+        c.lambda = imp.x;
+        c.dt_warm = -imp.y;
         c.pen = -g;
         c.kind = KIND_PENALTY;
         c.wt = sl.k;
@@ -317,7 +327,9 @@ fn narrow(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (c.kind == KIND_LAGRANGE && old.kind == KIND_LAGRANGE && old.lambda > 0.0 && old.dt_warm > 0.0) {
         c.lambda = old.lambda * (dtn / old.dt_warm);
     }
-    c.dt_warm = dtn;
+    if (c.kind != KIND_PENALTY) {
+        c.dt_warm = dtn;
+    }
     cons[k] = c;
     if (c.kind == KIND_LAGRANGE) {
         atomicAdd(&cc.lagrange, 1u);

@@ -138,6 +138,10 @@ fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     let friction = cc.p.friction != 0u;
     if (k < cc.p.n_slots) {
         sh_f[l] = slot_report(k, dt);
+        let c = cons[k];
+        if (c.kind == KIND_PENALTY && c.dt_warm < 0.0) {
+            atomicAdd(&cc.bounded, 1u);
+        }
         if (friction) {
             sh_r[l] = slot_friction(k);
         }

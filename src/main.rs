@@ -649,6 +649,14 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                     "contact: {} broad-phase searches in {} steps",
                     s.contact_searches, s.steps
                 );
+                if s.contact_penalty_bounded > 0 {
+                    println!(
+                        "contact: {} penalty impulses bounded by the perfectly plastic impulse \
+                         (springs stiff for the step, omega dt > 1, as in an impact's first steps): \
+                         the spring energy they held is lost (in contact_energy)",
+                        s.contact_penalty_bounded
+                    );
+                }
                 if s.steps >= 20 && 2 * s.contact_searches > s.steps {
                     eprintln!(
                         "warning: contact nodes moved more than half the search margin in most steps, \

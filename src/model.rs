@@ -138,6 +138,10 @@ pub struct Model {
     pub gravity: [f64; 2],
     /// Duration of its linear ramp from 0 (s; 0: none).
     pub gravity_ramp: f64,
+    /// The run's fixed step, if any (as in the scene).
+    pub time_step: Option<f64>,
+    /// The run's safety factor on the stable step (as in the scene).
+    pub time_step_scale: f64,
 }
 
 impl Model {
@@ -168,6 +172,8 @@ impl Model {
             mass_damping: scene.run.mass_damping,
             gravity: scene.run.gravity,
             gravity_ramp: scene.run.gravity_ramp,
+            time_step: scene.run.time_step,
+            time_step_scale: scene.run.time_step_scale,
         };
         let any_axi = scene
             .bodies
@@ -535,6 +541,33 @@ impl Model {
         } else {
             p.thickness
         }
+    }
+
+    /// The elements' stable step at t = 0 (undeformed, at rest; without the safety factor).
+    pub fn initial_stable_step(&self) -> f64 {
+        let zero = [[0.0; 2]; 4];
+        (0..self.element_count())
+            .map(|e| {
+                crate::step::element::evaluate_state(
+                    self.params(e),
+                    &self.geometry(e),
+                    &self.corners[e],
+                    &zero,
+                    &zero,
+                    &crate::step::element::Dissipation::default(),
+                    0.0,
+                    &crate::step::plastic::PlasticState::VIRGIN,
+                )
+                .dt
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The run's first step: the fixed step, else the safety factor times
+    /// [`Model::initial_stable_step`] (the mass form of the penalty stiffness is set by it).
+    pub fn initial_step(&self) -> f64 {
+        self.time_step
+            .unwrap_or_else(|| self.time_step_scale * self.initial_stable_step())
     }
 
     /// Gravity at time `t`: [`Model::gravity`] times min(t / ramp, 1).

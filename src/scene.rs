@@ -152,8 +152,10 @@ struct RawContact {
     two_pass: Option<bool>,
     self_contact: Option<bool>,
     penalty_scale: Option<f64>,
+    penalty_stiffness: Option<String>,
     surfaces: Option<Vec<String>>,
     friction: Option<f64>,
+    friction_stiffness: Option<f64>,
 }
 
 /// `bodies` of a `[[contact]]`: the string "all" or a list of names.
@@ -175,7 +177,9 @@ struct RawWall {
     bodies: Option<Vec<String>>,
     method: Option<String>,
     penalty_scale: Option<f64>,
+    penalty_stiffness: Option<String>,
     friction: Option<f64>,
+    friction_stiffness: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -571,8 +575,36 @@ pub enum ContactMethod {
     Penalty,
 }
 
-/// Default penalty scale `s` in k = s K t L^2 / A.
-pub const DEFAULT_PENALTY_SCALE: f64 = 0.1;
+/// How a penalty spring's stiffness is derived (`penalty_stiffness`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum PenaltyForm {
+    /// From the modulus: k = s K t L^2 / A per master segment (K the 2D bulk modulus, t the
+    /// thickness, L the segment, A its element's area); the springs shorten the stable step.
+    Modulus,
+    /// From the mass and the step: k = s m* / dt^2 (m* the reduced mass of the pair, dt the run's
+    /// step at t = 0), so that omega dt = sqrt(s) whatever the mesh and material; the stable step
+    /// is not reduced.
+    Mass,
+}
+
+impl PenaltyForm {
+    /// The word of the scene key.
+    pub fn word(self) -> &'static str {
+        match self {
+            PenaltyForm::Modulus => "modulus",
+            PenaltyForm::Mass => "mass",
+        }
+    }
+}
+
+/// Default form of the penalty stiffness.
+pub const DEFAULT_PENALTY_FORM: PenaltyForm = PenaltyForm::Modulus;
+
+/// Default penalty scale `s` of the modulus form, k = s K t L^2 / A.
+pub const DEFAULT_PENALTY_SCALE: f64 = 2.0;
+
+/// Default penalty scale `s` of the mass form, k = s m* / dt^2.
+pub const DEFAULT_MASS_PENALTY_SCALE: f64 = 0.1;
 
 /// Node-to-segment contact: a pair of bodies, or a group (every pair among its bodies, and each
 /// body against itself with self-contact).
@@ -597,6 +629,11 @@ pub struct Contact {
     pub two_pass: bool,
     /// Penalty scale `s` (penalty only).
     pub penalty_scale: f64,
+    /// Form of the penalty stiffness (penalty only).
+    pub penalty_form: PenaltyForm,
+    /// Tangential (friction) spring stiffness of penalty friction over the normal one
+    /// (`friction_stiffness`, default 1).
+    pub friction_stiffness: f64,
     /// A pair limited to named faces (`surfaces = ["a", "b"]`): per body, the name of the
     /// physical curve of its Gmsh file and its line elements as pairs of body node indices;
     /// only the boundary segments among them (and their nodes) take part. `None`: the whole
@@ -621,6 +658,11 @@ pub struct RigidWall {
     pub method: ContactMethod,
     /// Penalty scale `s` (penalty only).
     pub penalty_scale: f64,
+    /// Form of the penalty stiffness (penalty only).
+    pub penalty_form: PenaltyForm,
+    /// Tangential (friction) spring stiffness of penalty friction over the normal one
+    /// (`friction_stiffness`, default 1).
+    pub friction_stiffness: f64,
     /// Coulomb friction coefficient mu (0: frictionless).
     pub friction: f64,
 }
@@ -1074,8 +1116,64 @@ impl Validator<'_> {
         }
     }
 
-    fn penalty_scale(&self, key: &str, s: Option<f64>, method: ContactMethod) -> Result<f64> {
+    /// The form of the penalty stiffness (`penalty_stiffness`), penalty only.
+    fn penalty_form(
+        &self,
+        key: &str,
+        form: Option<&str>,
+        method: ContactMethod,
+    ) -> Result<PenaltyForm> {
+        let f = match form {
+            None => return Ok(DEFAULT_PENALTY_FORM),
+            Some("modulus") => PenaltyForm::Modulus,
+            Some("mass") => PenaltyForm::Mass,
+            Some(other) => {
+                return Err(self.invalid(
+                    key,
+                    format!("{other:?}"),
+                    "expected \"modulus\" (k = s K t L^2 / A) or \"mass\" (k = s m* / dt^2)",
+                ))
+            }
+        };
+        if method != ContactMethod::Penalty {
+            return Err(self.invalid(
+                key,
+                format!("{:?}", f.word()),
+                "applies to method = \"penalty\" only",
+            ));
+        }
+        Ok(f)
+    }
+
+    /// `friction_stiffness`: the tangential spring over the normal one, penalty with friction only.
+    fn friction_stiffness(
+        &self,
+        key: &str,
+        r: Option<f64>,
+        method: ContactMethod,
+        mu: f64,
+    ) -> Result<f64> {
+        match r {
+            None => Ok(1.0),
+            Some(x) if method != ContactMethod::Penalty || mu == 0.0 => Err(self.invalid(
+                key,
+                fmt_num(x),
+                "applies to method = \"penalty\" with friction > 0 only (the tangential spring \
+                 of penalty friction, as a multiple of the normal one)",
+            )),
+            Some(x) => self.positive(key, x),
+        }
+    }
+
+    fn penalty_scale(
+        &self,
+        key: &str,
+        s: Option<f64>,
+        method: ContactMethod,
+        form: PenaltyForm,
+    ) -> Result<f64> {
         match s {
+            None if form == PenaltyForm::Mass => Ok(DEFAULT_MASS_PENALTY_SCALE),
             None => Ok(DEFAULT_PENALTY_SCALE),
             Some(_) if method != ContactMethod::Penalty => Err(self.invalid(
                 key,
@@ -1148,8 +1246,24 @@ impl Validator<'_> {
         }
         self.given_name_length(key, c.name.as_ref())?;
         let method = self.method(&format!("{key}.method"), c.method.as_deref())?;
-        let penalty_scale =
-            self.penalty_scale(&format!("{key}.penalty_scale"), c.penalty_scale, method)?;
+        let penalty_form = self.penalty_form(
+            &format!("{key}.penalty_stiffness"),
+            c.penalty_stiffness.as_deref(),
+            method,
+        )?;
+        let penalty_scale = self.penalty_scale(
+            &format!("{key}.penalty_scale"),
+            c.penalty_scale,
+            method,
+            penalty_form,
+        )?;
+        let friction = self.friction(&format!("{key}.friction"), c.friction)?;
+        let friction_stiffness = self.friction_stiffness(
+            &format!("{key}.friction_stiffness"),
+            c.friction_stiffness,
+            method,
+            friction,
+        )?;
         let names: Vec<&str> = list.iter().map(|&i| bodies[i].name.as_str()).collect();
         let default = if !group {
             names.join("-")
@@ -1220,8 +1334,10 @@ impl Validator<'_> {
             method,
             two_pass: group || c.two_pass.unwrap_or(true),
             penalty_scale,
+            penalty_form,
+            friction_stiffness,
             surfaces,
-            friction: self.friction(&format!("{key}.friction"), c.friction)?,
+            friction,
         })
     }
 
@@ -1261,8 +1377,24 @@ impl Validator<'_> {
             None => (0..bodies.len()).collect(),
         };
         let method = self.method(&format!("{key}.method"), w.method.as_deref())?;
-        let penalty_scale =
-            self.penalty_scale(&format!("{key}.penalty_scale"), w.penalty_scale, method)?;
+        let penalty_form = self.penalty_form(
+            &format!("{key}.penalty_stiffness"),
+            w.penalty_stiffness.as_deref(),
+            method,
+        )?;
+        let penalty_scale = self.penalty_scale(
+            &format!("{key}.penalty_scale"),
+            w.penalty_scale,
+            method,
+            penalty_form,
+        )?;
+        let friction = self.friction(&format!("{key}.friction"), w.friction)?;
+        let friction_stiffness = self.friction_stiffness(
+            &format!("{key}.friction_stiffness"),
+            w.friction_stiffness,
+            method,
+            friction,
+        )?;
         let name = match &w.name {
             Some(n) => n.clone(),
             None => {
@@ -1277,7 +1409,9 @@ impl Validator<'_> {
             bodies: list,
             method,
             penalty_scale,
-            friction: self.friction(&format!("{key}.friction"), w.friction)?,
+            penalty_form,
+            friction_stiffness,
+            friction,
         })
     }
 

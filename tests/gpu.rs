@@ -684,6 +684,10 @@ fn friction_as_on_the_cpu_and_the_same_bits_twice() {
         ("block", block_on_block(1.0e-3, "lagrange")),
         ("floor, penalty", block_on_floor(1.0e-3, "penalty")),
         ("block, penalty", block_on_block(1.0e-3, "penalty")),
+        (
+            "floor, penalty, softer tangent",
+            block_on_floor(1.0e-3, "penalty") + "friction_stiffness = 0.25\n",
+        ),
     ] {
         let (sc, sg, _, _, _, _) = both(ctx.clone(), &text, name, None);
         let (_, sg2, _, _, _, _) = both(ctx.clone(), &text, name, None);

@@ -7,7 +7,14 @@ use super::report::Interface;
 use super::surface::{self, Surface};
 use super::{ContactSet, Pass, Wall};
 use crate::model::Model;
-use crate::scene::Contact;
+use crate::scene::{Contact, PenaltyForm};
+
+/// A contact's or wall's penalty stiffness settings.
+#[derive(Clone, Copy)]
+struct Spring {
+    scale: f64,
+    form: PenaltyForm,
+}
 
 /// 2D bulk modulus used by the penalty stiffness: lambda (of the formulation) + mu.
 fn bulk_modulus(model: &Model, body: usize) -> f64 {
@@ -26,6 +33,8 @@ struct Builder<'m> {
     local: Vec<u32>,
     nodes: Vec<u32>,
     min_length: f64,
+    /// The run's first step (the mass form's dt), computed when first needed.
+    step: Option<f64>,
 }
 
 impl Builder<'_> {
@@ -55,6 +64,41 @@ impl Builder<'_> {
         }
     }
 
+    /// The run's first step (see [`Model::initial_step`]).
+    fn step(&mut self) -> f64 {
+        let model = self.model;
+        *self.step.get_or_insert_with(|| model.initial_step())
+    }
+
+    /// Penalty stiffness of a spring: the modulus form `scale` K t L^2 / A (body `b`, a segment
+    /// of length `l` of element `e`), or the mass form `scale` m* / dt^2 with the reduced mass
+    /// m* of masses `m1` and `m2` (`m2` infinite: a wall).
+    fn stiffness(&mut self, spring: Spring, b: usize, e: u32, l: f64, m1: f64, m2: f64) -> f64 {
+        match spring.form {
+            PenaltyForm::Modulus => {
+                let t = self.model.thickness(e as usize);
+                spring.scale * bulk_modulus(self.model, b) * t * l * l / element_area(self.model, e)
+            }
+            PenaltyForm::Mass => {
+                let m = if m2.is_finite() {
+                    m1 * m2 / (m1 + m2)
+                } else {
+                    m1
+                };
+                let dt = self.step();
+                spring.scale * m / (dt * dt)
+            }
+        }
+    }
+
+    /// The smallest node mass of `s`.
+    fn min_mass(&self, s: &Surface) -> f64 {
+        s.nodes
+            .iter()
+            .map(|&g| self.model.mass[g as usize])
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Adds the nodes of `ss` (body `b`'s surface) to `p` as slaves.
     fn slaves(&mut self, p: &mut Pass, b: usize, ss: &Surface) {
         let mut prev = BTreeMap::new();
@@ -74,16 +118,27 @@ impl Builder<'_> {
         }
     }
 
-    /// Adds the segments of `ms` (body `b`'s surface) to `p` as masters, with `share` of the contact's
-    /// penalty stiffness `scale` K t L^2 / A.
-    fn masters(&mut self, p: &mut Pass, b: usize, ms: &Surface, share: f64, scale: f64) {
-        let k_body = bulk_modulus(self.model, b);
+    /// Adds the segments of `ms` (body `b`'s surface) to `p` as masters, with `share` of the
+    /// contact's penalty stiffness (the mass form against slave nodes of at least `slave_mass`).
+    fn masters(
+        &mut self,
+        p: &mut Pass,
+        b: usize,
+        ms: &Surface,
+        share: f64,
+        spring: Spring,
+        slave_mass: f64,
+    ) {
         for s in &ms.segments {
             let l = surface::length(self.model, s);
             self.min_length = self.min_length.min(l);
-            let t = self.model.thickness(s.element as usize);
-            p.stiffness
-                .push(share * scale * k_body * t * l * l / element_area(self.model, s.element));
+            let mm = s
+                .nodes
+                .iter()
+                .map(|&g| self.model.mass[g as usize])
+                .fold(f64::INFINITY, f64::min);
+            let k = self.stiffness(spring, b, s.element, l, slave_mass, mm);
+            p.stiffness.push(share * k);
             let ab = s.nodes.map(|g| self.add(g));
             p.segments.push(ab);
             p.segment_body.push(b as u32);
@@ -106,19 +161,27 @@ impl Builder<'_> {
             segment_body: Vec::new(),
             stiffness: Vec::new(),
             friction: c.friction,
+            friction_stiffness: c.friction_stiffness,
+            mass_form: c.penalty_form == PenaltyForm::Mass,
             candidates: Vec::new(),
+        };
+        let spring = Spring {
+            scale: c.penalty_scale,
+            form: c.penalty_form,
         };
         if c.group {
             // One symmetric pass: every node pair is met from both sides, each side with half
             // the stiffness (as a two-pass contact).
             let mut p = empty(true);
+            let mut slave_mass = f64::INFINITY;
             for &b in &c.bodies {
                 let ss = self.surface(b);
+                slave_mass = slave_mass.min(self.min_mass(&ss));
                 self.slaves(&mut p, b, &ss);
             }
             for &b in &c.bodies {
                 let ms = self.surface(b);
-                self.masters(&mut p, b, &ms, 0.5, c.penalty_scale);
+                self.masters(&mut p, b, &ms, 0.5, spring, slave_mass);
             }
             passes.push(p);
             return;
@@ -144,7 +207,8 @@ impl Builder<'_> {
         let share = if c.two_pass { 0.5 } else { 1.0 };
         for (slave, master, ks, km, slave_is_first) in dirs {
             let mut p = empty(slave_is_first);
-            self.masters(&mut p, master, &surf[km], share, c.penalty_scale);
+            let slave_mass = self.min_mass(&surf[ks]);
+            self.masters(&mut p, master, &surf[km], share, spring, slave_mass);
             self.slaves(&mut p, slave, &surf[ks]);
             passes.push(p);
         }
@@ -155,21 +219,24 @@ impl Builder<'_> {
         let mut nodes = Vec::new();
         let mut body = Vec::new();
         let mut stiffness = Vec::new();
+        let spring = Spring {
+            scale: w.penalty_scale,
+            form: w.penalty_form,
+        };
         for &b in &w.bodies {
             let s = self.surface(b);
-            let k_body = bulk_modulus(self.model, b);
             for &g in &s.nodes {
-                // The node's stiffest adjacent boundary segment.
+                // The node's stiffest adjacent boundary segment (modulus form), or its mass.
                 let mut k = 0.0f64;
+                let m = self.model.mass[g as usize];
                 for seg in s.segments.iter().filter(|seg| seg.nodes.contains(&g)) {
                     let l = surface::length(self.model, seg);
                     self.min_length = self.min_length.min(l);
-                    let t = self.model.thickness(seg.element as usize);
-                    k = k.max(t * l * l / element_area(self.model, seg.element));
+                    k = k.max(self.stiffness(spring, b, seg.element, l, m, f64::INFINITY));
                 }
                 nodes.push(self.add(g));
                 body.push(b as u32);
-                stiffness.push(w.penalty_scale * k_body * k);
+                stiffness.push(k);
             }
         }
         Wall {
@@ -181,6 +248,8 @@ impl Builder<'_> {
             body,
             stiffness,
             friction: w.friction,
+            friction_stiffness: w.friction_stiffness,
+            mass_form: w.penalty_form == PenaltyForm::Mass,
         }
     }
 }
@@ -197,6 +266,7 @@ impl ContactSet {
             local: vec![u32::MAX; model.node_count()],
             nodes: Vec::new(),
             min_length: f64::INFINITY,
+            step: None,
         };
         let mut interfaces = Vec::new();
         let mut passes = Vec::new();
@@ -263,6 +333,7 @@ impl ContactSet {
             searches: 0,
             sweep_stats: Default::default(),
             penalty_step: None,
+            penalty_bounded: 0,
             cons: Vec::new(),
         };
         set.penalty_step = set.compute_penalty_step();

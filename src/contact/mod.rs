@@ -77,6 +77,12 @@ struct Pass {
     /// Coulomb friction coefficient of the interface.
     #[serde(default)]
     friction: f64,
+    /// Penalty friction: the tangential spring over the normal one.
+    #[serde(default = "one")]
+    friction_stiffness: f64,
+    /// Penalty in the mass form (k = s m* / dt^2): outside the stable step.
+    #[serde(default)]
+    mass_form: bool,
     /// Admissible candidate (position in `slaves`, segment) pairs from the last search, sorted.
     candidates: Vec<(u32, u32)>,
 }
@@ -116,6 +122,16 @@ struct Wall {
     /// Coulomb friction coefficient.
     #[serde(default)]
     friction: f64,
+    /// Penalty friction: the tangential spring over the normal one.
+    #[serde(default = "one")]
+    friction_stiffness: f64,
+    /// Penalty in the mass form (k = s m* / dt^2): outside the stable step.
+    #[serde(default)]
+    mass_form: bool,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// An active constraint of the step.
@@ -206,6 +222,10 @@ pub struct ContactSet {
     searches: u64,
     sweep_stats: solve::SweepStats,
     penalty_step: Option<(f64, String)>,
+    /// Penalty impulses bounded by the perfectly plastic impulse so far (constraint-steps; see
+    /// [`penalty_impulse`]).
+    #[serde(default)]
+    penalty_bounded: u64,
     // Scratch.
     x_n: Vec<[f64; 2]>,
     x_tr: Vec<[f64; 2]>,
@@ -237,6 +257,12 @@ impl ContactSet {
     /// Broad-phase searches so far.
     pub fn searches(&self) -> u64 {
         self.searches
+    }
+
+    /// Penalty impulses bounded so far (constraint-steps with a spring too stiff for the step;
+    /// see [`penalty_impulse`]).
+    pub fn penalty_bounded(&self) -> u64 {
+        self.penalty_bounded
     }
 
     /// The Lagrange sweeps so far.

@@ -326,11 +326,14 @@ impl ContactSet {
                 if p.method == ContactMethod::Penalty {
                     let rate = self.free_relative(s, Some((a, b)), pr.xi, pr.normal);
                     let g_trial = pr.gap + dt * rate;
-                    c.lambda = penalty_impulse(p.stiffness[j], pr.gap, rate, g_trial, w, dt, dt_n);
+                    let (lambda, bounded) =
+                        penalty_impulse(p.stiffness[j], pr.gap, rate, g_trial, w, dt, dt_n);
+                    c.lambda = lambda;
+                    self.penalty_bounded += u64::from(bounded);
                     c.penetration = -pr.gap;
                     c.w = -w;
                     if p.friction > 0.0 {
-                        let k = p.stiffness[j];
+                        let k = p.friction_stiffness * p.stiffness[j];
                         self.penalty_friction(&mut c, k, p.friction, dt, dt_n, &mut springs);
                     }
                 }
@@ -341,7 +344,7 @@ impl ContactSet {
     }
 
     /// Penalty friction (the Curnier-Mroz regularization of Coulomb's law): a tangential spring
-    /// of the normal spring's stiffness `k` at the contact point, its force carried from the
+    /// of stiffness `k` (the normal spring's times `friction_stiffness`) at the contact point, its force carried from the
     /// last step and incremented by -k dt v_t (the relative tangential velocity of the free
     /// update), returned onto the slip limit |f_t| <= mu f_n, f_n = lambda / dt_n the normal
     /// spring's force; its impulse dt_n f_t goes into `c.lt`, the force into `springs` (for
@@ -428,12 +431,14 @@ impl ContactSet {
                             continue;
                         }
                         let rate = dot(self.v_free[l as usize], n);
-                        c.lambda =
+                        let (lambda, bounded) =
                             penalty_impulse(w.stiffness[idx], g, rate, g_tr, weight, dt, dt_n);
+                        c.lambda = lambda;
+                        self.penalty_bounded += u64::from(bounded);
                         c.penetration = -g;
                         c.w = -weight;
                         if w.friction > 0.0 {
-                            let (k, mu) = (w.stiffness[idx], w.friction);
+                            let (k, mu) = (w.friction_stiffness * w.stiffness[idx], w.friction);
                             self.penalty_friction(&mut c, k, mu, dt, dt_n, &mut springs);
                         }
                     }

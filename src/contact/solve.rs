@@ -56,10 +56,14 @@ impl ContactSet {
                 }
             }
         };
+        // The mass form (k = s m* / dt^2) is chosen for the step and left out; the tangential
+        // spring of penalty friction (k_t = friction_stiffness x k) acts along the tangent, apart
+        // from the normal one: the stiffer of the two counts.
+        let tangential = |mu: f64, r: f64| if mu > 0.0 { r.max(1.0) } else { 1.0 };
         for p in self
             .passes
             .iter()
-            .filter(|p| p.method == ContactMethod::Penalty)
+            .filter(|p| p.method == ContactMethod::Penalty && !p.mass_form)
         {
             let ms = p
                 .slaves
@@ -76,7 +80,9 @@ impl ContactSet {
             // node of a group is both in its one pass (each spring at half the stiffness): both
             // springs act on it.
             let passes = if p.two_pass { 2.0 } else { 1.0 };
-            let k = passes * p.stiffness.iter().copied().fold(0.0f64, f64::max);
+            let k = passes
+                * tangential(p.friction, p.friction_stiffness)
+                * p.stiffness.iter().copied().fold(0.0f64, f64::max);
             consider(
                 k * (1.0 / ms + 1.0 / mm),
                 &format!("contact {:?}", self.interfaces[p.interface].name),
@@ -85,14 +91,15 @@ impl ContactSet {
         for w in self
             .walls
             .iter()
-            .filter(|w| w.method == ContactMethod::Penalty)
+            .filter(|w| w.method == ContactMethod::Penalty && !w.mass_form)
         {
-            let omega2 = w
-                .nodes
-                .iter()
-                .zip(&w.stiffness)
-                .map(|(&l, k)| k / self.mass[l as usize])
-                .fold(0.0f64, f64::max);
+            let kt = tangential(w.friction, w.friction_stiffness);
+            let omega2 = kt
+                * w.nodes
+                    .iter()
+                    .zip(&w.stiffness)
+                    .map(|(&l, k)| k / self.mass[l as usize])
+                    .fold(0.0f64, f64::max);
             consider(
                 omega2,
                 &format!("rigid wall {:?}", self.interfaces[w.interface].name),
@@ -321,22 +328,42 @@ impl ContactSet {
     }
 }
 
-/// Penalty impulse over the step for a spring of stiffness `k` at gap `g` (< 0), bounded so that
-/// one step never does more than the perfectly plastic impulse (Belytschko X.6):
+/// (omega dt)^2 = k dt_n w of a penalty spring above which its impulse is bounded (see
+/// [`penalty_impulse`]): omega dt = 1, beyond the default springs (omega dt about 0.3) and below
+/// the linear stability limit of 2.
+pub const STIFF_SPRING: f64 = 1.0;
+
+/// Penalty impulse over the step for a spring of stiffness `k` at gap `g` (< 0): dt_n k (-g), the
+/// spring unchanged, as long as it is soft for the step ((omega dt)^2 = k dt_n w at most
+/// [`STIFF_SPRING`]): it then stores and returns its energy like any spring, and the release gives
+/// back what the impact stored. A stiffer spring (a fixed step above its limit, or a stiff
+/// mass-form scale) would chatter and gain energy (REFERENCES.md section 6); its impulse is bounded
+/// so that one step never does more than the perfectly plastic impulse (Belytschko X.6):
 /// - while the free update approaches (`rate` < 0, the relative normal velocity), at most the
 ///   impulse that stops the approach: no release within the impact step, no velocity reversal;
 /// - while it separates, at most the impulse that brings the node back onto the surface by
 ///   u_{n+1} (the gap `g_trial` of the free update closed), so a spring never throws it off.
 ///
-/// For omega dt well below 1 neither bound is active and the spring acts unchanged; for a stiff
-/// spring the bounds keep the run from gaining energy. `w` is dt (1/m_s + ...).
+/// The bounded spring loses energy (kept as contact energy); the second value says whether the
+/// bound acted. `w` is dt (1/m_s + ...).
 #[inline]
-pub fn penalty_impulse(k: f64, g: f64, rate: f64, g_trial: f64, w: f64, dt: f64, dt_n: f64) -> f64 {
+pub fn penalty_impulse(
+    k: f64,
+    g: f64,
+    rate: f64,
+    g_trial: f64,
+    w: f64,
+    dt: f64,
+    dt_n: f64,
+) -> (f64, bool) {
     let spring = dt_n * k * (-g).max(0.0);
+    if k * dt_n * w <= STIFF_SPRING {
+        return (spring, false);
+    }
     let bound = if rate < 0.0 {
         -rate * dt / w
     } else {
         (-g_trial / w).max(0.0)
     };
-    spring.min(bound)
+    (spring.min(bound), bound < spring)
 }

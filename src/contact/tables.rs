@@ -28,6 +28,8 @@ pub struct SlotTable {
     pub stiffness: f64,
     /// Coulomb friction coefficient of the slot's contact or wall.
     pub friction: f64,
+    /// Penalty friction: the tangential spring over the normal one.
+    pub friction_stiffness: f64,
     /// The slot's pass (index in pass order), `u32::MAX` for a wall.
     pub pass: u32,
     /// The slave node's body (for a wall, the node's body).
@@ -95,6 +97,7 @@ impl ContactSet {
                     point: [0.0; 2],
                     stiffness: 0.0,
                     friction: p.friction,
+                    friction_stiffness: p.friction_stiffness,
                     pass: pi as u32,
                     body: p.slave_body[si],
                     group: p.group,
@@ -127,6 +130,7 @@ impl ContactSet {
                     point: w.point,
                     stiffness: w.stiffness[idx],
                     friction: w.friction,
+                    friction_stiffness: w.friction_stiffness,
                     pass: u32::MAX,
                     body: w.body[idx],
                     group: false,

@@ -1149,6 +1149,7 @@ impl Solver for GpuSolver {
             out.contact_searches = k.searches as u64;
             out.contact_sweeps_max = k.sweeps_max as u64;
             out.contact_unconverged = k.unconverged as u64;
+            out.contact_penalty_bounded = k.bounded as u64;
             out.contact_sweeps_mean = if k.solve_steps > 0 {
                 k.sweeps_total as f64 / k.solve_steps as f64
             } else {

@@ -53,6 +53,11 @@ pub struct Summary {
     pub contact_sweeps_max: u64,
     /// Lagrange contact: steps whose sweeps stopped at the sweep limit before the tolerance.
     pub contact_unconverged: u64,
+    /// Penalty contact: impulses bounded by the perfectly plastic impulse (constraint-steps
+    /// whose spring was too stiff for the step, (omega dt)^2 > 1): the spring energy they kept
+    /// stays in `contact_energy` after release. 0: every spring acted unchanged.
+    #[serde(default)]
+    pub contact_penalty_bounded: u64,
     /// Seconds per stage where the backend measures them.
     pub stage_seconds: Vec<(String, f64)>,
     /// History rows written.

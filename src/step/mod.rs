@@ -243,6 +243,9 @@ pub struct Counters {
     pub contact_sweeps_max: u64,
     /// Lagrange contact: steps whose sweeps stopped at the sweep limit before the tolerance.
     pub contact_unconverged: u64,
+    /// Penalty contact: impulses bounded by the perfectly plastic impulse (constraint-steps with
+    /// a spring too stiff for the step; the energy they keep is lost).
+    pub contact_penalty_bounded: u64,
 }
 
 /// A time integrator of a model: the CPU reference or the GPU backend.

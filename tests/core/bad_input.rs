@@ -1033,6 +1033,66 @@ fn bad_friction_names_the_key_and_value() {
     );
 }
 
+#[test]
+fn bad_penalty_stiffness_names_the_key_and_value() {
+    let wall = |rest: &str| {
+        with_contact(&format!(
+            "[[rigid_wall]]\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\n{rest}\n"
+        ))
+    };
+    expect_accepted(
+        "wall_mass_form",
+        &wall("method = \"penalty\"\npenalty_stiffness = \"mass\"\npenalty_scale = 0.2"),
+        true,
+    );
+    expect_accepted(
+        "wall_friction_stiffness",
+        &wall("method = \"penalty\"\nfriction = 0.3\nfriction_stiffness = 0.5"),
+        true,
+    );
+    for (case, rest, needles) in [
+        (
+            "wall_form_unknown",
+            "method = \"penalty\"\npenalty_stiffness = \"springy\"",
+            ["rigid_wall[0].penalty_stiffness", "\"springy\"", "\"mass\""],
+        ),
+        (
+            "wall_form_lagrange",
+            "penalty_stiffness = \"mass\"",
+            ["rigid_wall[0].penalty_stiffness", "\"mass\"", "penalty"],
+        ),
+        (
+            "wall_friction_stiffness_frictionless",
+            "method = \"penalty\"\nfriction_stiffness = 0.5",
+            ["rigid_wall[0].friction_stiffness", "0.5", "friction > 0"],
+        ),
+        (
+            "wall_friction_stiffness_lagrange",
+            "friction = 0.3\nfriction_stiffness = 0.5",
+            ["rigid_wall[0].friction_stiffness", "0.5", "penalty"],
+        ),
+        (
+            "wall_friction_stiffness_negative",
+            "method = \"penalty\"\nfriction = 0.3\nfriction_stiffness = -2.0",
+            ["rigid_wall[0].friction_stiffness", "-2", "positive"],
+        ),
+        (
+            "wall_friction_stiffness_nan",
+            "method = \"penalty\"\nfriction = 0.3\nfriction_stiffness = nan",
+            ["rigid_wall[0].friction_stiffness", "NaN", "positive"],
+        ),
+    ] {
+        expect_rejected(case, &wall(rest), &needles);
+    }
+    expect_rejected(
+        "contact_form_number",
+        &with_contact(
+            "[[contact]]\nbodies = [\"block\", \"other\"]\nmethod = \"penalty\"\npenalty_stiffness = \"modulus \"\n",
+        ),
+        &["contact[0].penalty_stiffness", "\"modulus \"", "\"modulus\""],
+    );
+}
+
 fn with_pressure(keys: &str) -> String {
     format!("{}\n[[pressure]]\n{keys}\n", valid())
 }

@@ -54,6 +54,10 @@ fn a_block_sliding_on_a_clamped_block_decelerates_at_mu_g() {
         ("block", block_on_block(2.0e-3, "lagrange")),
         ("floor, penalty", block_on_floor(2.0e-3, "penalty")),
         ("block, penalty", block_on_block(2.0e-3, "penalty")),
+        (
+            "floor, penalty, softer tangent",
+            block_on_floor(2.0e-3, "penalty") + "friction_stiffness = 0.25\n",
+        ),
     ] {
         let (rows, balance, mass) = rows(&text, &format!("friction-{name}"));
         // Least-squares deceleration over the run.
@@ -90,6 +94,36 @@ fn a_block_sliding_on_a_clamped_block_decelerates_at_mu_g() {
         );
         assert!(balance < 1e-6, "{name}: energy balance {balance:e}");
     }
+}
+
+/// `friction_stiffness` scales the tangential spring of penalty friction, which counts in the
+/// stable step when it is the stiffer: k_t = 4 k halves the springs' step 2 / omega; a softer
+/// one leaves it to the normal spring.
+#[test]
+fn friction_stiffness_sets_the_tangential_spring_and_its_stable_step() {
+    let step = |extra: &str| {
+        let text = block_on_floor(1.0e-3, "penalty") + extra;
+        let (_, model, _) = build(&text);
+        ricochet::contact::ContactSet::new(&model)
+            .expect("a wall")
+            .penalty_step()
+            .expect("penalty springs")
+            .0
+    };
+    let (one, stiff, soft) = (
+        step(""),
+        step("friction_stiffness = 4.0\n"),
+        step("friction_stiffness = 0.25\n"),
+    );
+    eprintln!("penalty step: k_t = k {one:.4e}, 4 k {stiff:.4e}, k / 4 {soft:.4e}");
+    assert!((stiff / one - 0.5).abs() < 1e-12);
+    assert_eq!(soft, one);
+    // Frictionless, the tangential spring does not exist and does not count.
+    let (_, model, _) = build(&block_on_floor(1.0e-3, "penalty").replace("friction = 0.3", ""));
+    let frictionless = ricochet::contact::ContactSet::new(&model)
+        .and_then(|c| c.penalty_step().map(|p| p.0))
+        .expect("penalty springs");
+    assert_eq!(frictionless, one);
 }
 
 #[test]

@@ -185,6 +185,63 @@ fn gpu_penalty_keeps_the_restitution_and_a_stiff_penalty_shortens_the_step() {
     assert_penalty_step_refused(&r.summary);
 }
 
+/// The release on the device (see the CPU test `penalty_release_returns_the_stored_spring_energy`).
+#[test]
+fn gpu_penalty_release_returns_the_stored_spring_energy() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text = penalty_release_scene();
+    let (r, model) = run_on(Some(ctx.clone()), &text, "release");
+    let (rc, _) = run_on(None, &text, "release");
+    let e0 = 0.5 * model.bodies[0].mass * V0 * V0;
+    let (last, lc) = (rows(&r).pop().unwrap(), rows(&rc).pop().unwrap());
+    let kept = last.contact / e0;
+    let v1 = last.body_velocity[0][0];
+    eprintln!(
+        "gpu penalty release: contact energy after separation {kept:.2e} E0 (CPU {:.2e}), striker {v1:.5} m/s (CPU {:.5})",
+        lc.contact / e0,
+        lc.body_velocity[0][0]
+    );
+    assert!(last.contacts[0].active_nodes == 0, "separated");
+    assert!(kept.abs() < 1e-3, "contact energy {kept} E0 after release");
+    assert!((v1 - lc.body_velocity[0][0]).abs() < 1e-4 * V0);
+    assert_eq!(r.summary.contact_penalty_bounded, 0);
+    // The stiff run bounds its impulses, and says so, as on the CPU.
+    let stiff = rod_scene(20, Some(1.0), "penalty", "penalty_scale = 10.0", 2.0)
+        .replace("time_step = ", "# time_step = ");
+    let (r, _) = run_on(Some(ctx), &stiff, "stiff_bounded");
+    let (rc, _) = run_on(None, &stiff, "stiff_bounded");
+    eprintln!(
+        "penalty x100: bounded impulses {} (CPU {})",
+        r.summary.contact_penalty_bounded, rc.summary.contact_penalty_bounded
+    );
+    assert!(rc.summary.contact_penalty_bounded > 0);
+    assert_eq!(
+        r.summary.contact_penalty_bounded,
+        rc.summary.contact_penalty_bounded
+    );
+}
+
+/// The default penalty on the short striker on the device (see the CPU test
+/// `default_penalty_gets_the_short_striker_within_5_percent_and_1_percent`).
+#[test]
+fn gpu_default_penalty_gets_the_short_striker_within_5_percent_and_1_percent() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let (exact_t, exact_v) = SHORT_STRIKER;
+    let text = short_striker_scene("method = \"penalty\"");
+    let (r, _) = run_on(Some(ctx), &text, "striker");
+    let (t, v1, v2) = short_striker_figures(&rows(&r));
+    eprintln!(
+        "gpu short striker, default penalty: {:.2} us ({:+.2} %), striker {v1:.4}, target {v2:.4} m/s ({:+.2} %)",
+        t * 1e6,
+        100.0 * (t / exact_t - 1.0),
+        100.0 * (v2 / exact_v - 1.0)
+    );
+    assert!((t / exact_t - 1.0).abs() < 0.05, "contact time {t}");
+    assert!((v2 / exact_v - 1.0).abs() < 0.01, "target {v2}");
+}
+
 #[test]
 fn gpu_square_hitting_a_wall_corner_first_neither_turns_nor_drifts_sideways() {
     let Some(ctx) = context() else { return };

@@ -258,6 +258,88 @@ pub fn penalty_scale_for(n: usize, omega_dt: f64) -> f64 {
     omega * omega * m_node / (E_STEEL * t / 2.0)
 }
 
+/// Identical rods at n = 20 with penalty contact at omega dt = 0.3 (s = 1/18, as the rods
+/// verification case), run to 1.5 x 2L/c: well after separation.
+pub fn penalty_release_scene() -> String {
+    rod_scene(
+        20,
+        Some(1.0),
+        "penalty",
+        &format!("penalty_scale = {:e}", 1.0 / 18.0),
+        1.5,
+    )
+}
+
+/// The short striker of REFERENCES.md section 1 as the issue measured it: aluminium (E = 70 GPa,
+/// rho = 2700, c = 5091.75 m/s), plane stress, nu = 0, one row of square cells of 1.25 mm,
+/// L1 = 0.05 m (40 cells) at 7 m/s onto L2 = 0.1 m (80 cells); contact with `keys` (method
+/// included) at the default step. Exact: contact for 2 L1 / c = 19.640 us, then the striker at
+/// rest and the target at v0 L1 / L2 = 3.5 m/s.
+pub fn short_striker_scene(keys: &str) -> String {
+    format!(
+        r#"
+[run]
+end_time = 6.0e-5
+history_interval = 1.0e-7
+bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
+
+[[material]]
+name = "aluminium"
+model = "linear_elastic"
+density = 2700.0
+youngs_modulus = 7.0e10
+poisson_ratio = 0.0
+
+[[body]]
+name = "striker"
+material = "aluminium"
+formulation = "plane_stress"
+thickness = 0.01
+mesh = {{ rectangle = {{ origin = [-0.05, 0.0], size = [0.05, 0.00125], cells = [40, 1] }} }}
+initial_velocity = [7.0, 0.0]
+hourglass = {{ form = "stiffness", coefficient = 0.1 }}
+
+[[body]]
+name = "target"
+material = "aluminium"
+formulation = "plane_stress"
+thickness = 0.01
+mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [0.1, 0.00125], cells = [80, 1] }} }}
+hourglass = {{ form = "stiffness", coefficient = 0.1 }}
+
+[[contact]]
+bodies = ["striker", "target"]
+{keys}
+"#
+    )
+}
+
+/// The short striker's exact contact time 2 L1 / c (s) and target velocity (m/s).
+pub const SHORT_STRIKER: (f64, f64) = (19.640e-6, 3.5);
+
+/// (contact time from the first to the last row whose force exceeds 1 % of the peak, plus one
+/// row; striker and target velocities at the end) of a short-striker run.
+pub fn short_striker_figures(samples: &[Sample]) -> (f64, f64, f64) {
+    let f: Vec<f64> = samples
+        .iter()
+        .map(|s| s.contacts[0].force[0].abs())
+        .collect();
+    let peak = f.iter().fold(0.0f64, |m, &x| m.max(x));
+    let on: Vec<f64> = samples
+        .iter()
+        .zip(&f)
+        .filter(|(_, &x)| x > 0.01 * peak)
+        .map(|(s, _)| s.time)
+        .collect();
+    let interval = samples[1].time - samples[0].time;
+    let last = samples.last().expect("rows");
+    (
+        on[on.len() - 1] - on[0] + interval,
+        last.body_velocity[0][0],
+        last.body_velocity[1][0],
+    )
+}
+
 /// The run of a fixed step above the rods' penalty limit failed with the diagnostic naming it.
 pub fn assert_penalty_step_refused(summary: &Summary) {
     assert_eq!(summary.status, "failed");

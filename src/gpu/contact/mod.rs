@@ -128,7 +128,8 @@ pub struct ContactCounters {
     pub searches: u32,
     pub grow: u32,
     pub lagrange: u32,
-    pub _reserved: u32,
+    /// Penalty impulses bounded so far (constraint-steps).
+    pub bounded: u32,
     pub sweeps: u32,
     pub sweeps_total: u32,
     pub sweeps_max: u32,
@@ -155,6 +156,9 @@ pub struct GpuSlot {
     pub pass: u32,
     pub body: u32,
     pub mu: f32,
+    /// Penalty friction: the tangential spring over the normal one.
+    pub kt: f32,
+    pub _pad: u32,
 }
 
 /// Mirror of WGSL `Segment`.
@@ -174,7 +178,7 @@ pub const CONS_SIZE: u64 = 64;
 
 const _: () = assert!(std::mem::size_of::<ContactParams>() == 160);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 64);
-const _: () = assert!(std::mem::size_of::<GpuSlot>() == 48);
+const _: () = assert!(std::mem::size_of::<GpuSlot>() == 56);
 const _: () = assert!(std::mem::size_of::<GpuSegment>() == 32);
 
 /// The compiled contact kernels and their layouts (stateless, built once per device).
@@ -471,6 +475,8 @@ impl ContactState {
                 pass: s.pass,
                 body: s.body,
                 mu: s.friction as f32,
+                kt: s.friction_stiffness as f32,
+                _pad: 0,
             })
             .collect();
         let segs: Vec<GpuSegment> = t
