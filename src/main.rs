@@ -918,7 +918,25 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
                     "the elements control dt".to_string()
                 }
             ),
-            None => println!("  lagrange no effect on the stable step"),
+            None => {
+                let mass_form = model
+                    .contacts
+                    .iter()
+                    .map(|c| (c.method, c.penalty_form))
+                    .chain(model.walls.iter().map(|w| (w.method, w.penalty_form)))
+                    .any(|(m, f)| {
+                        m == ricochet::scene::ContactMethod::Penalty
+                            && f == ricochet::scene::PenaltyForm::Mass
+                    });
+                if mass_form {
+                    println!(
+                        "  penalty  mass form k = s m* / dt^2 at dt = {:.4e} s: no effect on the stable step",
+                        model.initial_step()
+                    );
+                } else {
+                    println!("  lagrange no effect on the stable step");
+                }
+            }
         }
         let friction: Vec<String> = model
             .contacts

@@ -290,6 +290,22 @@ fn default_penalty_gets_the_short_striker_within_5_percent_and_1_percent() {
     assert_eq!(m.summary.dt_max, lag.summary.dt_max);
     assert!(r.summary.dt_max < lag.summary.dt_max);
     assert_eq!(m.summary.contact_penalty_bounded, 0);
+    // `check` says which form sets the springs and what they do to the step.
+    let dir = tmp_dir("striker_check");
+    for (keys, needle) in [
+        (
+            "method = \"penalty\"\npenalty_stiffness = \"mass\"",
+            "penalty  mass form k = s m* / dt^2 at dt = ",
+        ),
+        ("method = \"penalty\"", "it controls dt"),
+    ] {
+        let file = dir.join("striker.toml");
+        std::fs::write(&file, short_striker_scene(keys)).unwrap();
+        let o = run_bin(&["check", file.to_str().unwrap()]);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.contains(needle), "{text}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
