@@ -158,6 +158,22 @@ struct RawContact {
     friction_stiffness: Option<f64>,
 }
 
+/// The penalty and friction keys of a `[[contact]]` or `[[rigid_wall]]` as written.
+struct RawSprings<'a> {
+    form: Option<&'a str>,
+    scale: Option<f64>,
+    friction: Option<f64>,
+    friction_stiffness: Option<f64>,
+}
+
+/// The penalty and friction keys of a contact or wall, checked, with their defaults.
+struct Springs {
+    form: PenaltyForm,
+    scale: f64,
+    friction: f64,
+    friction_stiffness: f64,
+}
+
 /// `bodies` of a `[[contact]]`: the string "all" or a list of names.
 #[derive(Debug, Deserialize)]
 #[serde(untagged)]
@@ -1116,6 +1132,25 @@ impl Validator<'_> {
         }
     }
 
+    /// The penalty and friction keys of contact or wall `key` with `method`.
+    fn springs(&self, key: &str, method: ContactMethod, raw: RawSprings) -> Result<Springs> {
+        let form = self.penalty_form(&format!("{key}.penalty_stiffness"), raw.form, method)?;
+        let scale = self.penalty_scale(&format!("{key}.penalty_scale"), raw.scale, method, form)?;
+        let friction = self.friction(&format!("{key}.friction"), raw.friction)?;
+        let friction_stiffness = self.friction_stiffness(
+            &format!("{key}.friction_stiffness"),
+            raw.friction_stiffness,
+            method,
+            friction,
+        )?;
+        Ok(Springs {
+            form,
+            scale,
+            friction,
+            friction_stiffness,
+        })
+    }
+
     /// The form of the penalty stiffness (`penalty_stiffness`), penalty only.
     fn penalty_form(
         &self,
@@ -1246,23 +1281,20 @@ impl Validator<'_> {
         }
         self.given_name_length(key, c.name.as_ref())?;
         let method = self.method(&format!("{key}.method"), c.method.as_deref())?;
-        let penalty_form = self.penalty_form(
-            &format!("{key}.penalty_stiffness"),
-            c.penalty_stiffness.as_deref(),
-            method,
-        )?;
-        let penalty_scale = self.penalty_scale(
-            &format!("{key}.penalty_scale"),
-            c.penalty_scale,
-            method,
-            penalty_form,
-        )?;
-        let friction = self.friction(&format!("{key}.friction"), c.friction)?;
-        let friction_stiffness = self.friction_stiffness(
-            &format!("{key}.friction_stiffness"),
-            c.friction_stiffness,
-            method,
+        let Springs {
+            form: penalty_form,
+            scale: penalty_scale,
             friction,
+            friction_stiffness,
+        } = self.springs(
+            key,
+            method,
+            RawSprings {
+                form: c.penalty_stiffness.as_deref(),
+                scale: c.penalty_scale,
+                friction: c.friction,
+                friction_stiffness: c.friction_stiffness,
+            },
         )?;
         let names: Vec<&str> = list.iter().map(|&i| bodies[i].name.as_str()).collect();
         let default = if !group {
@@ -1377,23 +1409,20 @@ impl Validator<'_> {
             None => (0..bodies.len()).collect(),
         };
         let method = self.method(&format!("{key}.method"), w.method.as_deref())?;
-        let penalty_form = self.penalty_form(
-            &format!("{key}.penalty_stiffness"),
-            w.penalty_stiffness.as_deref(),
-            method,
-        )?;
-        let penalty_scale = self.penalty_scale(
-            &format!("{key}.penalty_scale"),
-            w.penalty_scale,
-            method,
-            penalty_form,
-        )?;
-        let friction = self.friction(&format!("{key}.friction"), w.friction)?;
-        let friction_stiffness = self.friction_stiffness(
-            &format!("{key}.friction_stiffness"),
-            w.friction_stiffness,
-            method,
+        let Springs {
+            form: penalty_form,
+            scale: penalty_scale,
             friction,
+            friction_stiffness,
+        } = self.springs(
+            key,
+            method,
+            RawSprings {
+                form: w.penalty_stiffness.as_deref(),
+                scale: w.penalty_scale,
+                friction: w.friction,
+                friction_stiffness: w.friction_stiffness,
+            },
         )?;
         let name = match &w.name {
             Some(n) => n.clone(),
