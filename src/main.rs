@@ -941,13 +941,20 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
         let friction: Vec<String> = model
             .contacts
             .iter()
-            .map(|c| (&c.name, c.friction, c.method))
-            .chain(model.walls.iter().map(|w| (&w.name, w.friction, w.method)))
-            .filter(|(_, mu, _)| *mu > 0.0)
-            .map(|(n, mu, m)| {
+            .map(|c| (&c.name, c.friction, c.method, c.friction_stiffness))
+            .chain(
+                model
+                    .walls
+                    .iter()
+                    .map(|w| (&w.name, w.friction, w.method, w.friction_stiffness)),
+            )
+            .filter(|(_, mu, _, _)| *mu > 0.0)
+            .map(|(n, mu, m, kt)| {
                 let how = match m {
-                    ricochet::scene::ContactMethod::Lagrange => "lagrange",
-                    ricochet::scene::ContactMethod::Penalty => "penalty, regularized",
+                    ricochet::scene::ContactMethod::Lagrange => "lagrange".to_string(),
+                    ricochet::scene::ContactMethod::Penalty => {
+                        format!("penalty, regularized, k_t = {kt} k")
+                    }
                 };
                 format!("{n} mu = {mu} ({how})")
             })

@@ -149,4 +149,16 @@ fn check_prints_the_friction_and_the_gravity() {
         "{out}"
     );
     assert!(out.contains("-> gravity ->"), "{out}");
+    // Penalty friction: the tangential spring's stiffness.
+    let dir = tmp_dir("friction-check-penalty");
+    let file = dir.join("floor.toml");
+    let text = block_on_floor(1.0e-3, "penalty") + "friction_stiffness = 0.25\n";
+    std::fs::write(&file, text).expect("write");
+    let o = run_bin(&["check", file.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        out.contains("friction Coulomb: floor mu = 0.3 (penalty, regularized, k_t = 0.25 k)"),
+        "{out}"
+    );
 }
