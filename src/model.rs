@@ -543,31 +543,35 @@ impl Model {
         }
     }
 
-    /// The elements' stable step at t = 0 (undeformed, at rest; without the safety factor).
-    pub fn initial_stable_step(&self) -> f64 {
-        let zero = [[0.0; 2]; 4];
-        (0..self.element_count())
-            .map(|e| {
-                crate::step::element::evaluate_state(
-                    self.params(e),
-                    &self.geometry(e),
-                    &self.corners[e],
-                    &zero,
-                    &zero,
-                    &crate::step::element::Dissipation::default(),
-                    0.0,
-                    &crate::step::plastic::PlasticState::VIRGIN,
-                )
-                .dt
-            })
-            .fold(f64::INFINITY, f64::min)
+    /// The elements' stable step at t = 0 (undeformed, at the initial velocities; without the
+    /// safety factor) and the element that sets it; a NaN step (a degenerate element) is kept
+    /// as the answer.
+    pub fn initial_stable_step(&self) -> (f64, usize) {
+        use crate::step::element::{evaluate_with, Dissipation};
+        let mut best = (f64::INFINITY, 0);
+        for e in 0..self.element_count() {
+            let q = self.quads[e];
+            let out = evaluate_with(
+                self.params(e),
+                &self.geometry(e),
+                &self.corners[e],
+                &[[0.0; 2]; 4],
+                &q.map(|i| self.velocity[i as usize]),
+                &Dissipation::default(),
+                0.0,
+            );
+            if out.dt.is_nan() || out.dt < best.0 {
+                best = (out.dt, e);
+            }
+        }
+        best
     }
 
     /// The run's first step: the fixed step, else the safety factor times
     /// [`Model::initial_stable_step`] (the mass form of the penalty stiffness is set by it).
     pub fn initial_step(&self) -> f64 {
         self.time_step
-            .unwrap_or_else(|| self.time_step_scale * self.initial_stable_step())
+            .unwrap_or_else(|| self.time_step_scale * self.initial_stable_step().0)
     }
 
     /// Gravity at time `t`: [`Model::gravity`] times min(t / ramp, 1).

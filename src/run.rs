@@ -187,25 +187,7 @@ pub const MAX_SNAPSHOTS: f64 = 1e5;
 /// it), with the penalty springs and `time_step_scale` (or the fixed `time_step`) applied, and
 /// the contact that shortened it, if any.
 pub fn first_step(scene: &Scene, model: &Model) -> (f64, f64, usize, Option<String>) {
-    use crate::step::element::{evaluate_with, Dissipation};
-    let mut best = (f64::INFINITY, 0);
-    for e in 0..model.element_count() {
-        let q = model.quads[e];
-        let out = evaluate_with(
-            model.params(e),
-            &model.geometry(e),
-            &model.corners[e],
-            &[[0.0; 2]; 4],
-            &q.map(|i| model.velocity[i as usize]),
-            &Dissipation::default(),
-            0.0,
-        );
-        // A NaN step (a degenerate element) is kept as the answer.
-        if out.dt.is_nan() || out.dt < best.0 {
-            best = (out.dt, e);
-        }
-    }
-    let (dt_element, e) = best;
+    let (dt_element, e) = model.initial_stable_step();
     let penalty = model
         .contacts
         .iter()
