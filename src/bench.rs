@@ -889,6 +889,19 @@ pub struct ContactRow {
     pub free_seconds: f64,
     /// Median over the rounds of (with - without) / with: the contact share of the step.
     pub contact_share: f64,
+    /// With `--friction`: the Coulomb coefficient of the third variant (the contacts and walls
+    /// with friction), else `None`.
+    pub friction: Option<f64>,
+    /// With `--friction`: steps per second of the variant with friction.
+    pub friction_steps_per_second: Option<f64>,
+    /// With `--friction`: median over the rounds of (with friction - with) / steps, in
+    /// microseconds: what friction adds to a contact step.
+    pub friction_us_per_step: Option<f64>,
+    /// Lagrange contact: the solver's sweeps per step with constraints, mean over the run so
+    /// far (0 without Lagrange constraints).
+    pub sweeps_mean: f64,
+    /// With `--friction`: the same for the variant with friction.
+    pub friction_sweeps_mean: Option<f64>,
     /// Broad-phase searches during the timed steps with contact.
     pub searches: u64,
     /// Searches per 100 timed steps.
@@ -957,12 +970,17 @@ fn contact_row<S: Timed>(
     model: &Model,
     with: &mut S,
     without: &mut S,
+    mut friction: Option<(f64, &mut S)>,
     steps: u64,
     rounds: u32,
 ) -> Result<ContactRow> {
     let rounds = rounds.max(1);
     let per = per_round(steps, rounds);
-    for (what, s) in [("contact", &mut *with), ("free", &mut *without)] {
+    let mut warm: Vec<(&str, &mut S)> = vec![("contact", &mut *with), ("free", &mut *without)];
+    if let Some((_, f)) = friction.as_mut() {
+        warm.push(("friction", &mut **f));
+    }
+    for (what, s) in warm {
         let taken = s.take(2)?;
         if taken < 2 {
             return Err(stopped(
@@ -986,15 +1004,43 @@ fn contact_row<S: Timed>(
         }
         Ok(t)
     };
-    let t = alternate(
-        rounds,
-        &mut [&mut || run(&mut *with, "contact"), &mut || {
-            run(&mut *without, "free")
-        }],
-    )?;
+    let mu = friction.as_ref().map(|(mu, _)| *mu);
+    let mut friction_sweeps_mean = None;
+    let t = match friction {
+        None => alternate(
+            rounds,
+            &mut [&mut || run(&mut *with, "contact"), &mut || {
+                run(&mut *without, "free")
+            }],
+        )?,
+        Some((_, f)) => {
+            let t = alternate(
+                rounds,
+                &mut [
+                    &mut || run(&mut *with, "contact"),
+                    &mut || run(&mut *without, "free"),
+                    &mut || run(&mut *f, "friction"),
+                ],
+            )?;
+            friction_sweeps_mean = Some(f.count().contact_sweeps_mean);
+            t
+        }
+    };
     let after = with.count();
     let total = per * u64::from(rounds);
     let wall: f64 = t[0].iter().sum();
+    let (friction_steps_per_second, friction_us_per_step) = match t.get(2) {
+        Some(tf) => (
+            Some(total as f64 / tf.iter().sum::<f64>()),
+            Some(median(
+                tf.iter()
+                    .zip(&t[0])
+                    .map(|(f, c)| 1e6 * (f - c) / per as f64)
+                    .collect(),
+            )),
+        ),
+        None => (None, None),
+    };
     let searches = after.contact_searches - before.contact_searches;
     Ok(ContactRow {
         scene: which,
@@ -1009,6 +1055,11 @@ fn contact_row<S: Timed>(
         steps_per_second: total as f64 / wall,
         free_seconds: t[1].iter().sum(),
         contact_share: median(t[0].iter().zip(&t[1]).map(|(c, f)| (c - f) / c).collect()),
+        friction: mu,
+        friction_steps_per_second,
+        friction_us_per_step,
+        sweeps_mean: after.contact_sweeps_mean,
+        friction_sweeps_mean,
         searches,
         searches_per_100_steps: 100.0 * searches as f64 / total as f64,
         bytes_read_back_per_step: (after.bytes_read_back - before.bytes_read_back) as f64
@@ -1016,20 +1067,42 @@ fn contact_row<S: Timed>(
     })
 }
 
-/// Builds the model, plan and schedule of a contact scene variant.
+/// `text` with `friction = mu` in every `[[contact]]` and `[[rigid_wall]]` table (the line goes
+/// right under the table's header, so the tables keep their other keys).
+pub fn with_friction(text: &str, mu: f64) -> String {
+    let mut s = String::with_capacity(text.len() + 64);
+    for line in text.lines() {
+        s.push_str(line);
+        s.push('\n');
+        if matches!(line.trim(), "[[contact]]" | "[[rigid_wall]]") {
+            s.push_str(&format!("friction = {mu:?}\n"));
+        }
+    }
+    s
+}
+
+/// Builds the model, plan and schedule of a contact scene variant (`friction`: the Coulomb
+/// coefficient put on its contacts and walls, see [`with_friction`]).
 fn contact_build(
     which: ContactScene,
     size: usize,
     contact: bool,
     pile: PileContact,
+    friction: Option<f64>,
 ) -> Result<(Model, Plan, crate::step::Schedule)> {
-    let scene = which.scene(size, contact, pile)?;
+    let mut text = which.text(size, contact, pile);
+    if let Some(mu) = friction {
+        text = with_friction(&text, mu);
+    }
+    let name = format!("bench_{}.toml", which.name());
+    let scene = Scene::parse(&text, Path::new(&name))?;
     let (model, plan) = build(&scene)?;
     Ok((model, plan, bench_schedule(&scene)))
 }
 
 /// Times the CPU reference on a contact scene of `size`: `rounds` rounds of `steps / rounds`
-/// steps with and without the scene's `[[contact]]`, alternating.
+/// steps with and without the scene's `[[contact]]`, alternating; with `friction`, also the
+/// scene with that Coulomb coefficient on its contacts and walls (a third variant).
 ///
 /// # Errors
 /// Scene errors, or [`Error::Bench`] when a run stops before it took all its steps.
@@ -1039,11 +1112,19 @@ pub fn cpu_contact(
     steps: u64,
     rounds: u32,
     pile: PileContact,
+    friction: Option<f64>,
 ) -> Result<ContactRow> {
-    let (model, plan, schedule) = contact_build(which, size, true, pile)?;
+    let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
     let mut with = CpuSolver::new(model.clone(), plan, schedule);
-    let (m, p, s) = contact_build(which, size, false, pile)?;
+    let (m, p, s) = contact_build(which, size, false, pile, None)?;
     let mut without = CpuSolver::new(m, p, s);
+    let mut rough = match friction {
+        Some(mu) => {
+            let (m, p, s) = contact_build(which, size, true, pile, Some(mu))?;
+            Some((mu, CpuSolver::new(m, p, s)))
+        }
+        None => None,
+    };
     contact_row(
         which,
         "cpu",
@@ -1052,6 +1133,7 @@ pub fn cpu_contact(
         &model,
         &mut with,
         &mut without,
+        rough.as_mut().map(|(mu, s)| (*mu, s)),
         steps,
         rounds,
     )
@@ -1070,11 +1152,19 @@ pub fn gpu_contact(
     steps: u64,
     rounds: u32,
     pile: PileContact,
+    friction: Option<f64>,
 ) -> Result<ContactRow> {
-    let (model, plan, schedule) = contact_build(which, size, true, pile)?;
+    let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
     let mut with = GpuSolver::new(ctx.clone(), &model, &plan, schedule)?;
-    let (m, p, s) = contact_build(which, size, false, pile)?;
+    let (m, p, s) = contact_build(which, size, false, pile, None)?;
     let mut without = GpuSolver::new(ctx.clone(), &m, &p, s)?;
+    let mut rough = match friction {
+        Some(mu) => {
+            let (m, p, s) = contact_build(which, size, true, pile, Some(mu))?;
+            Some((mu, GpuSolver::new(ctx.clone(), &m, &p, s)?))
+        }
+        None => None,
+    };
     contact_row(
         which,
         "gpu",
@@ -1083,15 +1173,19 @@ pub fn gpu_contact(
         &model,
         &mut with,
         &mut without,
+        rough.as_mut().map(|(mu, s)| (*mu, s)),
         steps,
         rounds,
     )
 }
 
 /// Formats contact rows as a table.
+/// With `--friction`, two more columns: the steps per second with friction and what friction
+/// adds to a step (microseconds).
 pub fn contact_table(rows: &[ContactRow]) -> String {
+    let rough = rows.iter().any(|r| r.friction.is_some());
     let mut s = format!(
-        "{:<8} {:<7} {:>9} {:>6} {:>7} {:>10} {:>8} {:>15} {:>16}\n",
+        "{:<8} {:<7} {:>9} {:>6} {:>7} {:>10} {:>8} {:>15} {:>16}",
         "scene",
         "backend",
         "elements",
@@ -1102,9 +1196,17 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
         "searches/100 st",
         "read back [B/st]"
     );
+    s.push_str(&format!(" {:>6}", "sweeps"));
+    if rough {
+        s.push_str(&format!(
+            " {:>16} {:>18} {:>15}",
+            "friction steps/s", "friction [us/st]", "friction sweeps"
+        ));
+    }
+    s.push('\n');
     for r in rows {
         s.push_str(&format!(
-            "{:<8} {:<7} {:>9} {:>6} {:>7} {:>10.1} {:>7.1}% {:>15.1} {:>16.0}\n",
+            "{:<8} {:<7} {:>9} {:>6} {:>7} {:>10.1} {:>7.1}% {:>15.1} {:>16.0}",
             r.scene.name(),
             r.backend,
             r.elements,
@@ -1115,6 +1217,20 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
             r.searches_per_100_steps,
             r.bytes_read_back_per_step
         ));
+        s.push_str(&format!(" {:>6.1}", r.sweeps_mean));
+        if rough {
+            match (
+                r.friction_steps_per_second,
+                r.friction_us_per_step,
+                r.friction_sweeps_mean,
+            ) {
+                (Some(f), Some(us), Some(sw)) => {
+                    s.push_str(&format!(" {f:>16.1} {us:>18.2} {sw:>15.1}"))
+                }
+                _ => s.push_str(&format!(" {:>16} {:>18} {:>15}", "-", "-", "-")),
+            }
+        }
+        s.push('\n');
     }
     s
 }
@@ -1197,9 +1313,31 @@ mod tests {
 
     #[test]
     fn contact_rows_on_the_cpu_take_their_steps() {
-        let row = cpu_contact(ContactScene::Striker, 4, 4, 2, PileContact::Pairs).expect("row");
+        let row =
+            cpu_contact(ContactScene::Striker, 4, 4, 2, PileContact::Pairs, None).expect("row");
         assert_eq!((row.steps, row.elements, row.bodies), (4, 96, 2));
         assert!(row.steps_per_second > 0.0 && row.bytes_read_back_per_step == 0.0);
-        assert!(contact_table(&[row]).contains("striker"));
+        assert!(row.friction_us_per_step.is_none());
+        let table = contact_table(&[row]);
+        assert!(table.contains("striker") && !table.contains("friction"));
+    }
+
+    #[test]
+    fn friction_rows_time_a_third_variant_with_friction_on_every_contact() {
+        let text = with_friction(&pile_text(2, Some(PileContact::All)), 0.3);
+        assert_eq!(
+            text.matches("friction = 0.3\n").count(),
+            2,
+            "the wall and the pile"
+        );
+        let scene = Scene::parse(&text, Path::new("pile.toml")).expect("parses");
+        assert!(scene.contacts.iter().all(|c| c.friction == 0.3));
+        let row =
+            cpu_contact(ContactScene::Pair, 4, 4, 2, PileContact::All, Some(0.3)).expect("row");
+        assert_eq!(row.friction, Some(0.3));
+        assert!(row.friction_steps_per_second.is_some_and(|f| f > 0.0));
+        assert!(row.friction_us_per_step.is_some_and(f64::is_finite));
+        let table = contact_table(&[row]);
+        assert!(table.contains("friction [us/st]"));
     }
 }

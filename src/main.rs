@@ -138,6 +138,10 @@ enum Command {
         /// fallback where that does not parse; small piles only).
         #[arg(long)]
         pile_pairs: bool,
+        /// Also time each contact scene with this Coulomb coefficient on its contacts and walls
+        /// (a third variant in the same rounds): what friction adds to a contact step.
+        #[arg(long)]
+        friction: Option<f64>,
         /// Steps timed per size.
         #[arg(long, default_value_t = 200)]
         steps: u64,
@@ -299,6 +303,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             cells,
             elements,
             pile_pairs,
+            friction,
             steps,
             rounds,
             json,
@@ -320,6 +325,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         })
                     })
                     .collect();
+            if let Some(mu) = friction.filter(|mu| !(mu.is_finite() && *mu > 0.0)) {
+                anyhow::bail!("--friction {mu}: must be a finite positive Coulomb coefficient");
+            }
             if block && cells.contains(&0) {
                 anyhow::bail!("--cells must be positive");
             }
@@ -413,7 +421,9 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         )
                     };
                     if run_cpu {
-                        let row = ricochet::bench::cpu_contact(which, size, steps, rounds, pile);
+                        let row = ricochet::bench::cpu_contact(
+                            which, size, steps, rounds, pile, friction,
+                        );
                         push(what("cpu"), row);
                     }
                     if let Some(ctx) = &ctx {
@@ -424,6 +434,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                             steps,
                             rounds,
                             pile,
+                            friction,
                         );
                         push(what("gpu"), row);
                     }

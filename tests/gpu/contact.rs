@@ -211,15 +211,27 @@ fn gpu_penalty_release_returns_the_stored_spring_energy() {
         .replace("time_step = ", "# time_step = ");
     let (r, _) = run_on(Some(ctx), &stiff, "stiff_bounded");
     let (rc, _) = run_on(None, &stiff, "stiff_bounded");
+    // Which constraint-steps cross the threshold (omega dt)^2 = 1 depends on the last bits of
+    // the gap and the spring, so f32 and f64 may bound a few different impulses (lavapipe 16
+    // like the CPU, the H100 20): the counts are not compared, the outcome is.
+    let (last, lc) = (rows(&r).pop().unwrap(), rows(&rc).pop().unwrap());
+    let kept = |s: &Sample| (s.kinetic + s.internal + s.hourglass) / e0;
     eprintln!(
-        "penalty x100: bounded impulses {} (CPU {})",
-        r.summary.contact_penalty_bounded, rc.summary.contact_penalty_bounded
-    );
-    assert!(rc.summary.contact_penalty_bounded > 0);
-    assert_eq!(
+        "penalty x100: bounded impulses {} (CPU {}), energy kept {:.5} E0 (CPU {:.5}), striker {:.5} m/s (CPU {:.5})",
         r.summary.contact_penalty_bounded,
-        rc.summary.contact_penalty_bounded
+        rc.summary.contact_penalty_bounded,
+        kept(&last),
+        kept(&lc),
+        last.body_velocity[0][0],
+        lc.body_velocity[0][0]
     );
+    assert!(rc.summary.contact_penalty_bounded > 0 && r.summary.contact_penalty_bounded > 0);
+    // Both 0.98622 E0 and 0.20847 m/s on lavapipe and on the H100.
+    assert!(
+        (kept(&last) - kept(&lc)).abs() < 1e-4,
+        "energy after the release"
+    );
+    assert!((last.body_velocity[0][0] - lc.body_velocity[0][0]).abs() < 1e-4 * V0);
 }
 
 /// The default penalty on the short striker on the device (see the CPU test
