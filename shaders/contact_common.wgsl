@@ -23,6 +23,7 @@ const SLOT_WALL: u32 = 0x20000u;
 const SLOT_SECOND: u32 = 0x40000u;    // two-body pass whose slave is the interface's second body
 const SLOT_GROUP: u32 = 0x80000u;     // group pass: the sign follows the body order
 const SLOT_SELF: u32 = 0x100000u;     // group pass that admits the slave's own body
+const SLOT_PERTURBED: u32 = 0x200000u; // perturbed Lagrangian: the spring on the consistent penetration
 
 // Grow requests (ContactCtl.grow bits).
 const GROW_CANDIDATES: u32 = 1u;
@@ -115,6 +116,8 @@ struct Slot {
     body: u32,            // the slave's body
     mu: f32,              // Coulomb coefficient of its contact or wall (0: none)
     kt: f32,              // penalty friction: the tangential spring over the normal one
+    ps: u32,              // perturbed Lagrangian: the slots of np, nn in the same pass (NONE: none)
+    ns: u32,
     _pad: u32,
 }
 

@@ -42,6 +42,109 @@ fn penalty_impulse(k: f32, g: f32, rate: f32, g_trial: f32, w: f32, dt: f32, dtn
     return vec2<f32>(min(spring, bound), select(0.0, 1.0, bound < spring));
 }
 
+// The perturbed Lagrangian's penetration of a slave node (crate::contact::consistent_penetration):
+// its penetration a (> 0) and, per surface segment, (length, the other end's penetration along
+// the node's normal); the N_I-weighted mean of the linear penetration over the contact support.
+fn consistent_penetration(a: f32, s0: vec2<f32>, s1: vec2<f32>) -> f32 {
+    var num = 0.0;
+    var den = 0.0;
+    for (var i = 0u; i < 2u; i++) {
+        var side = s0;
+        if (i == 1u) {
+            side = s1;
+        }
+        let l = side.x;
+        let b = side.y;
+        if (!(l > 0.0) || !(a > 0.0)) {
+            continue;
+        }
+        if (b >= 0.0) {
+            num += l * (2.0 * a + b) / 6.0;
+            den += l * 0.5;
+        } else {
+            let s = a / (a - b);
+            let c = b - a;
+            num += l * (a * s + (c - a) * s * s / 2.0 - c * s * s * s / 3.0);
+            den += l * (s - s * s / 2.0);
+        }
+    }
+    if (den > 0.0) {
+        return num / den;
+    }
+    return a;
+}
+
+// The perturbed Lagrangian's gap of slot `sl`'s node at gap g (< 0) along n
+// (ContactSet::consistent_gap): each neighbour's penetration measured along the same normal, at u_n.
+fn consistent_gap(sl: Slot, n: vec2<f32>, g: f32) -> f32 {
+    var side = array<vec2<f32>, 2>(vec2<f32>(0.0), vec2<f32>(0.0));
+    for (var i = 0u; i < 2u; i++) {
+        var j = sl.np;
+        if (i == 1u) {
+            j = sl.nn;
+        }
+        if (j != sl.s) {
+            let d = x_n(j, sl.s);
+            side[i] = vec2<f32>(length(d), -g - dot(d, n));
+        }
+    }
+    return -consistent_penetration(-g, side[0], side[1]);
+}
+
+// The signed gap at u_n of the pass slot `k`'s node to the closest of its candidate segments that
+// face its surface and that it projects onto, within half a segment behind it (ContactSet::
+// slave_gap); x: the gap, y: 1 if found.
+fn slave_gap(k: u32) -> vec2<f32> {
+    let sl = slots[k];
+    let t_own = x_n(sl.nn, sl.np);
+    let own = vec2<f32>(t_own.y, -t_own.x);
+    var best = vec2<f32>(0.0, 0.0);
+    let begin = ws[cc.p.o_coff + k];
+    let end = ws[cc.p.o_coff + k + 1u];
+    for (var q = begin; q < end; q++) {
+        let sg = segs[grow[q]];
+        let seg_t = x_n(sg.b, sg.a);
+        if (dot(own, vec2<f32>(seg_t.y, -seg_t.x)) >= 0.0) {
+            continue;
+        }
+        let l2 = dot(seg_t, seg_t);
+        if (!(l2 > 0.0)) {
+            continue;
+        }
+        let d = x_n(sl.s, sg.a);
+        let xi = dot(d, seg_t) / l2;
+        if (xi < -XI_TOLERANCE || xi > 1.0 + XI_TOLERANCE) {
+            continue;
+        }
+        let len = sqrt(l2);
+        let gap = dot(d, vec2<f32>(seg_t.y, -seg_t.x) / len);
+        if (gap > -0.5 * len && (best.y == 0.0 || abs(gap) < abs(best.x))) {
+            best = vec2<f32>(gap, 1.0);
+        }
+    }
+    return best;
+}
+
+// The perturbed Lagrangian's gap of pass slot `sl`'s node at gap g (< 0): each neighbour's
+// penetration its own gap (slave_gap of its slot), as on the CPU (ContactSet::collect_passes).
+fn consistent_pass_gap(sl: Slot, g: f32) -> f32 {
+    var side = array<vec2<f32>, 2>(vec2<f32>(0.0), vec2<f32>(0.0));
+    for (var i = 0u; i < 2u; i++) {
+        var ks = sl.ps;
+        if (i == 1u) {
+            ks = sl.ns;
+        }
+        if (ks == NONE) {
+            continue;
+        }
+        let gj = slave_gap(ks);
+        if (gj.y > 0.0) {
+            side[i] = vec2<f32>(length(x_n(slots[ks].s, sl.s)), -gj.x);
+        }
+    }
+    return -consistent_penetration(-g, side[0], side[1]);
+}
+
 // A candidate segment of a slave node (crate::contact::narrow::qualify): whether the node is in
 // contact with it, its selection key (larger is better), projection and normal.
 struct Qual {
@@ -257,8 +360,12 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
         let vs = vel(s).xy;
         let rate = dot(vs, best_n)
             - ((1.0 - best_xi) * dot(vel(sg.a).xy, best_n) + best_xi * dot(vel(sg.b).xy, best_n));
-        let g_trial = best_gap + dt * rate;
-        let imp = penalty_impulse(sg.k, best_gap, rate, g_trial, w, dt, dtn);
+        var g = best_gap;
+        if ((sl.info & SLOT_PERTURBED) != 0u) {
+            g = consistent_pass_gap(sl, best_gap);
+        }
+        let g_trial = g + dt * rate;
+        let imp = penalty_impulse(sg.k, g, rate, g_trial, w, dt, dtn);
         c.lambda = imp.x;
         c.dt_warm = -imp.y;
         c.pen = -best_gap;
@@ -290,7 +397,13 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
         }
     } else if (g < 0.0) {
         let rate = dot(vel(s).xy, n);
-        let imp = penalty_impulse(sl.k, g, rate, g_tr, w, dt, dtn);
+        var gs = g;
+        var gs_tr = g_tr;
+        if ((sl.info & SLOT_PERTURBED) != 0u) {
+            gs = consistent_gap(sl, n, g);
+            gs_tr = gs + dt * rate;
+        }
+        let imp = penalty_impulse(sl.k, gs, rate, gs_tr, w, dt, dtn);
         c.lambda = imp.x;
         c.dt_warm = -imp.y;
         c.pen = -g;

@@ -935,10 +935,7 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
                     .iter()
                     .map(|c| (c.method, c.penalty_form))
                     .chain(model.walls.iter().map(|w| (w.method, w.penalty_form)))
-                    .any(|(m, f)| {
-                        m == ricochet::scene::ContactMethod::Penalty
-                            && f == ricochet::scene::PenaltyForm::Mass
-                    });
+                    .any(|(m, f)| m.has_springs() && f == ricochet::scene::PenaltyForm::Mass);
                 if mass_form {
                     println!(
                         "  penalty  mass form k = s m* / dt^2 at dt = {:.4e} s: no effect on the stable step",
@@ -965,6 +962,10 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
                     ricochet::scene::ContactMethod::Lagrange => "lagrange".to_string(),
                     ricochet::scene::ContactMethod::Penalty => {
                         format!("penalty, regularized, k_t = {kt} k")
+                    }
+                    // Refused by the scene reader (normal multipliers only).
+                    ricochet::scene::ContactMethod::PerturbedLagrange => {
+                        "perturbed lagrange".to_string()
                     }
                 };
                 format!("{n} mu = {mu} ({how})")

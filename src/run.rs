@@ -193,7 +193,7 @@ pub fn first_step(scene: &Scene, model: &Model) -> (f64, f64, usize, Option<Stri
         .iter()
         .map(|c| c.method)
         .chain(model.walls.iter().map(|w| w.method))
-        .any(|m| m == crate::scene::ContactMethod::Penalty);
+        .any(|m| m.has_springs());
     let (dt_stable, by) = match penalty
         .then(|| crate::contact::ContactSet::new(model))
         .flatten()

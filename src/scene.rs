@@ -589,6 +589,31 @@ pub enum ContactMethod {
     Lagrange,
     /// Penalty springs p = k g, bounded by the perfectly plastic impulse; they shorten the stable step.
     Penalty,
+    /// Perturbed Lagrangian (Belytschko X.5.8): multipliers interpolated along the slave
+    /// surface with H = (1/beta) int Lambda^T Lambda (Eq. X.5.44), eliminated as in Eq. X.5.45:
+    /// the penalty distributed by the consistent H, each node's force the consistent nodal force
+    /// beta int N_I g of the penetration field, instead of k g node by node.
+    PerturbedLagrange,
+}
+
+impl ContactMethod {
+    /// Whether the method acts through penalty springs (penalty, perturbed Lagrangian): the
+    /// penalty keys apply, and the springs count in the stable step.
+    pub fn has_springs(self) -> bool {
+        matches!(
+            self,
+            ContactMethod::Penalty | ContactMethod::PerturbedLagrange
+        )
+    }
+
+    /// The word of the scene's `method` key.
+    pub fn word(self) -> &'static str {
+        match self {
+            ContactMethod::Lagrange => "lagrange",
+            ContactMethod::Penalty => "penalty",
+            ContactMethod::PerturbedLagrange => "perturbed_lagrange",
+        }
+    }
 }
 
 /// How a penalty spring's stiffness is derived (`penalty_stiffness`).
@@ -1124,10 +1149,11 @@ impl Validator<'_> {
         match m {
             None | Some("lagrange") => Ok(ContactMethod::Lagrange),
             Some("penalty") => Ok(ContactMethod::Penalty),
+            Some("perturbed_lagrange") => Ok(ContactMethod::PerturbedLagrange),
             Some(other) => Err(self.invalid(
                 key,
                 format!("{other:?}"),
-                "expected \"lagrange\" or \"penalty\"",
+                "expected \"lagrange\", \"penalty\" or \"perturbed_lagrange\"",
             )),
         }
     }
@@ -1136,7 +1162,7 @@ impl Validator<'_> {
     fn springs(&self, key: &str, method: ContactMethod, raw: RawSprings) -> Result<Springs> {
         let form = self.penalty_form(&format!("{key}.penalty_stiffness"), raw.form, method)?;
         let scale = self.penalty_scale(&format!("{key}.penalty_scale"), raw.scale, method, form)?;
-        let friction = self.friction(&format!("{key}.friction"), raw.friction)?;
+        let friction = self.friction(&format!("{key}.friction"), raw.friction, method)?;
         let friction_stiffness = self.friction_stiffness(
             &format!("{key}.friction_stiffness"),
             raw.friction_stiffness,
@@ -1170,11 +1196,11 @@ impl Validator<'_> {
                 ))
             }
         };
-        if method != ContactMethod::Penalty {
+        if !method.has_springs() {
             return Err(self.invalid(
                 key,
                 format!("{:?}", f.word()),
-                "applies to method = \"penalty\" only",
+                "applies to method = \"penalty\" or \"perturbed_lagrange\" only",
             ));
         }
         Ok(f)
@@ -1210,18 +1236,28 @@ impl Validator<'_> {
         match s {
             None if form == PenaltyForm::Mass => Ok(DEFAULT_MASS_PENALTY_SCALE),
             None => Ok(DEFAULT_PENALTY_SCALE),
-            Some(_) if method != ContactMethod::Penalty => Err(self.invalid(
+            Some(_) if !method.has_springs() => Err(self.invalid(
                 key,
                 format!("{:?}", s.unwrap_or_default()),
-                "applies to method = \"penalty\" only",
+                "applies to method = \"penalty\" or \"perturbed_lagrange\" only",
             )),
             Some(x) => self.positive(key, x),
         }
     }
 
-    /// The Coulomb coefficient `friction` of a contact or wall: finite and >= 0.
-    fn friction(&self, key: &str, mu: Option<f64>) -> Result<f64> {
-        mu.map_or(Ok(0.0), |mu| self.non_negative(key, mu))
+    /// The Coulomb coefficient `friction` of a contact or wall: finite and >= 0, and with a
+    /// method that carries it (not the perturbed Lagrangian, whose multipliers are normal only).
+    fn friction(&self, key: &str, mu: Option<f64>, method: ContactMethod) -> Result<f64> {
+        let mu = mu.map_or(Ok(0.0), |mu| self.non_negative(key, mu))?;
+        if mu > 0.0 && method == ContactMethod::PerturbedLagrange {
+            return Err(self.invalid(
+                key,
+                fmt_num(mu),
+                "friction needs method = \"lagrange\" or \"penalty\": the perturbed Lagrangian \
+                 carries normal multipliers only",
+            ));
+        }
+        Ok(mu)
     }
 
     fn contact(&self, key: &str, c: &RawContact, bodies: &[Body]) -> Result<Contact> {

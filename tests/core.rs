@@ -18,6 +18,7 @@
 //!   mass damping): two-pass Lagrange exact, one pass failing as it should;
 //! - [`general_contact`]: contact groups (`bodies = "all"`, lists) and self-contact: the scene
 //!   forms, the GPU tables, a pile of 16 disks and a ring pressed onto itself;
+//! - [`perturbed`]: the perturbed Lagrangian's consistent H against the node-by-node penalty;
 //! - [`contact`]: rod impact (Lagrange, penalty, rigid wall, impedance mismatch), corner-first
 //!   square on a wall, the contact plan and history columns;
 //! - [`stress`]: the stiff and extreme cases of `assets/stress/` (REFERENCES.md section 6): stiff
@@ -73,6 +74,8 @@ mod outputs;
 mod patch;
 #[path = "core/patch_contact.rs"]
 mod patch_contact;
+#[path = "core/perturbed.rs"]
+mod perturbed;
 #[path = "core/plan.rs"]
 mod plan;
 #[path = "core/plastic.rs"]

@@ -101,15 +101,7 @@ impl Builder<'_> {
 
     /// Adds the nodes of `ss` (body `b`'s surface) to `p` as slaves.
     fn slaves(&mut self, p: &mut Pass, b: usize, ss: &Surface) {
-        let mut prev = BTreeMap::new();
-        let mut next = BTreeMap::new();
-        for seg in &ss.segments {
-            next.insert(seg.nodes[0], seg.nodes[1]);
-            prev.insert(seg.nodes[1], seg.nodes[0]);
-        }
-        for &g in &ss.nodes {
-            let pg = prev.get(&g).copied().unwrap_or(g);
-            let ng = next.get(&g).copied().unwrap_or(g);
+        for (&g, [pg, ng]) in ss.nodes.iter().zip(surface_neighbours(ss)) {
             let s = self.add(g);
             let nb = [self.add(pg), self.add(ng)];
             p.slaves.push(s);
@@ -157,6 +149,7 @@ impl Builder<'_> {
             slaves: Vec::new(),
             slave_body: Vec::new(),
             neighbours: Vec::new(),
+            neighbour_slaves: Vec::new(),
             segments: Vec::new(),
             segment_body: Vec::new(),
             stiffness: Vec::new(),
@@ -223,6 +216,7 @@ impl Builder<'_> {
             scale: w.penalty_scale,
             form: w.penalty_form,
         };
+        let mut neighbours = Vec::new();
         for &b in &w.bodies {
             let s = self.surface(b);
             for &g in &s.nodes {
@@ -238,6 +232,10 @@ impl Builder<'_> {
                 body.push(b as u32);
                 stiffness.push(k);
             }
+            // (After the nodes, so that the local numbering stays that of the nodes.)
+            for nb in surface_neighbours(&s) {
+                neighbours.push(nb.map(|g| self.add(g)));
+            }
         }
         Wall {
             interface: iface,
@@ -246,6 +244,7 @@ impl Builder<'_> {
             normal: w.normal,
             nodes,
             body,
+            neighbours,
             stiffness,
             friction: w.friction,
             friction_stiffness: w.friction_stiffness,
@@ -275,6 +274,9 @@ impl ContactSet {
             let iface = interfaces.len();
             interfaces.push(Interface::new(&c.name));
             bld.contact(c, iface, &mut passes);
+        }
+        for p in &mut passes {
+            p.link_neighbours();
         }
         for w in &model.walls {
             let iface = interfaces.len();
@@ -339,4 +341,24 @@ impl ContactSet {
         set.penalty_step = set.compute_penalty_step();
         Some(set)
     }
+}
+
+/// Each node of `ss` (in its order): its neighbours along the surface (previous, next; global
+/// indices; the node itself where it has none).
+fn surface_neighbours(ss: &Surface) -> Vec<[u32; 2]> {
+    let mut prev = BTreeMap::new();
+    let mut next = BTreeMap::new();
+    for seg in &ss.segments {
+        next.insert(seg.nodes[0], seg.nodes[1]);
+        prev.insert(seg.nodes[1], seg.nodes[0]);
+    }
+    ss.nodes
+        .iter()
+        .map(|&g| {
+            [
+                prev.get(&g).copied().unwrap_or(g),
+                next.get(&g).copied().unwrap_or(g),
+            ]
+        })
+        .collect()
 }

@@ -68,6 +68,10 @@ struct Pass {
     /// Each slave node's neighbours along its own surface (previous, next; local indices): its
     /// outward normal is the perpendicular of next - previous.
     neighbours: Vec<[u32; 2]>,
+    /// The same neighbours as positions in `slaves` (`u32::MAX`: none, or not a slave of the
+    /// pass): the perturbed Lagrangian reads their gaps.
+    #[serde(default)]
+    neighbour_slaves: Vec<[u32; 2]>,
     /// Master segments (local node indices a -> b).
     segments: Vec<[u32; 2]>,
     /// Each segment's body.
@@ -88,6 +92,30 @@ struct Pass {
 }
 
 impl Pass {
+    /// Fills `neighbour_slaves` from `neighbours`.
+    fn link_neighbours(&mut self) {
+        let at: std::collections::HashMap<u32, u32> = self
+            .slaves
+            .iter()
+            .enumerate()
+            .map(|(i, &s)| (s, i as u32))
+            .collect();
+        self.neighbour_slaves = self
+            .neighbours
+            .iter()
+            .zip(&self.slaves)
+            .map(|(nb, &s)| {
+                nb.map(|j| {
+                    if j == s {
+                        u32::MAX
+                    } else {
+                        at.get(&j).copied().unwrap_or(u32::MAX)
+                    }
+                })
+            })
+            .collect();
+    }
+
     /// Sign of the impulse on the interface's first body for slave `si` against segment `j`:
     /// in a pair, by direction; in a group, +1 when the slave's body comes first, -1 when the
     /// segment's does, 0 within one body (self-contact exerts no net force).
@@ -117,6 +145,10 @@ struct Wall {
     nodes: Vec<u32>,
     /// Each node's body.
     body: Vec<u32>,
+    /// Each node's neighbours along its own surface (previous, next; local indices): the
+    /// perturbed Lagrangian interpolates the penetration along them.
+    #[serde(default)]
+    neighbours: Vec<[u32; 2]>,
     /// Penalty stiffness of each node.
     stiffness: Vec<f64>,
     /// Coulomb friction coefficient.

@@ -4,7 +4,7 @@
 //! (`collect_passes`, `collect_walls`). The free functions are pure and shared with the GPU
 //! kernel, which implements the same rules.
 
-use super::solve::penalty_impulse;
+use super::solve::{consistent_penetration, penalty_impulse};
 use super::{dot, sub, Constraint, ContactSet, Pass};
 use crate::scene::ContactMethod;
 
@@ -220,7 +220,7 @@ impl ContactSet {
                 let before = line_gap(self.x_n[sl], self.x_n[al], self.x_n[bl]);
                 penetrates(pr.gap, before, pr.length).then_some(((before.min(0.0), pr.gap), pr))
             }
-            ContactMethod::Penalty => {
+            ContactMethod::Penalty | ContactMethod::PerturbedLagrange => {
                 let pr = project(self.x_n[sl], self.x_n[al], self.x_n[bl])?;
                 (pr.gap < 0.0 && pr.gap > -0.5 * pr.length).then_some(((pr.gap, 0.0), pr))
             }
@@ -323,11 +323,31 @@ impl ContactSet {
                     c.wt = self.weight(s, Some((a, b)), pr.xi, c.tangent(), 1.0);
                     c.mu = if c.wt > 0.0 { p.friction } else { 0.0 };
                 }
-                if p.method == ContactMethod::Penalty {
+                if p.method.has_springs() {
                     let rate = self.free_relative(s, Some((a, b)), pr.xi, pr.normal);
-                    let g_trial = pr.gap + dt * rate;
+                    let g = if p.method == ContactMethod::PerturbedLagrange {
+                        let sides = [0, 1].map(|i| {
+                            let sj = p
+                                .neighbour_slaves
+                                .get(si as usize)
+                                .map_or(u32::MAX, |n| n[i]);
+                            if sj == u32::MAX {
+                                return None;
+                            }
+                            let gj = self.slave_gap(p, sj)?;
+                            let d = sub(
+                                self.x_n[p.slaves[sj as usize] as usize],
+                                self.x_n[s as usize],
+                            );
+                            Some((d[0].hypot(d[1]), -gj))
+                        });
+                        -consistent_penetration(-pr.gap, sides.map(|x| x.unwrap_or((0.0, 0.0))))
+                    } else {
+                        pr.gap
+                    };
+                    let g_trial = g + dt * rate;
                     let (lambda, bounded) =
-                        penalty_impulse(p.stiffness[j], pr.gap, rate, g_trial, w, dt, dt_n);
+                        penalty_impulse(p.stiffness[j], g, rate, g_trial, w, dt, dt_n);
                     c.lambda = lambda;
                     self.penalty_bounded += u64::from(bounded);
                     c.penetration = -pr.gap;
@@ -379,6 +399,49 @@ impl ContactSet {
         springs.push((key, ft));
     }
 
+    /// The signed gap at u_n of the pass's slave `sj` (a position in `slaves`) to the closest of
+    /// its candidate segments that face its surface and that it projects onto (within half a
+    /// segment behind it), `None` without one: the penetration of a neighbour for the perturbed
+    /// Lagrangian (`contact_narrow.wgsl`'s `slave_gap`).
+    fn slave_gap(&self, p: &Pass, sj: u32) -> Option<f64> {
+        let first = p.candidates.partition_point(|c| c.0 < sj);
+        let s = p.slaves[sj as usize] as usize;
+        let [np, nn] = p.neighbours[sj as usize];
+        let t = sub(self.x_n[nn as usize], self.x_n[np as usize]);
+        let own = [t[1], -t[0]];
+        let mut best: Option<f64> = None;
+        for &(_, j) in p.candidates[first..].iter().take_while(|c| c.0 == sj) {
+            let [a, b] = p.segments[j as usize];
+            let (a, b) = (self.x_n[a as usize], self.x_n[b as usize]);
+            let seg_t = sub(b, a);
+            if dot(own, [seg_t[1], -seg_t[0]]) >= 0.0 {
+                continue;
+            }
+            let Some(pr) = project(self.x_n[s], a, b) else {
+                continue;
+            };
+            if pr.gap > -0.5 * pr.length && best.is_none_or(|g| pr.gap.abs() < g.abs()) {
+                best = Some(pr.gap);
+            }
+        }
+        best
+    }
+
+    /// The perturbed Lagrangian's gap of wall node `s` at gap `g` (< 0) along the wall's normal
+    /// `n`: minus the [`consistent_penetration`] over its two surface segments (to its
+    /// neighbours `nb`, at u_n), each neighbour's penetration its own distance to the wall.
+    fn consistent_gap(&self, s: u32, nb: [u32; 2], n: [f64; 2], g: f64) -> f64 {
+        let x = self.x_n[s as usize];
+        let side = |j: u32| {
+            if j == s {
+                return (0.0, 0.0);
+            }
+            let d = sub(self.x_n[j as usize], x);
+            (d[0].hypot(d[1]), -g - dot(d, n))
+        };
+        -consistent_penetration(-g, [side(nb[0]), side(nb[1])])
+    }
+
     /// The constraints of the walls' nodes; `skip` as for [`Self::collect_passes`].
     pub(super) fn collect_walls(&mut self, dt: f64, dt_n: f64, skip: Option<&[[u32; 2]]>) {
         let mut springs = std::mem::take(&mut self.pen_ft_next);
@@ -426,13 +489,19 @@ impl ContactSet {
                             continue;
                         }
                     }
-                    ContactMethod::Penalty => {
+                    ContactMethod::Penalty | ContactMethod::PerturbedLagrange => {
                         if g >= 0.0 {
                             continue;
                         }
                         let rate = dot(self.v_free[l as usize], n);
+                        let (gs, gs_tr) = if w.method == ContactMethod::PerturbedLagrange {
+                            let gs = self.consistent_gap(l, w.neighbours[idx], n, g);
+                            (gs, gs + dt * rate)
+                        } else {
+                            (g, g_tr)
+                        };
                         let (lambda, bounded) =
-                            penalty_impulse(w.stiffness[idx], g, rate, g_tr, weight, dt, dt_n);
+                            penalty_impulse(w.stiffness[idx], gs, rate, gs_tr, weight, dt, dt_n);
                         c.lambda = lambda;
                         self.penalty_bounded += u64::from(bounded);
                         c.penetration = -g;

@@ -3,7 +3,6 @@
 //! an active-set re-check at the corrected positions); the penalty springs' stable step.
 
 use super::{warm_key, Constraint, ContactSet};
-use crate::scene::ContactMethod;
 
 /// Projected Gauss-Seidel sweeps at most per step.
 pub const MAX_SWEEPS: usize = 500;
@@ -63,7 +62,7 @@ impl ContactSet {
         for p in self
             .passes
             .iter()
-            .filter(|p| p.method == ContactMethod::Penalty && !p.mass_form)
+            .filter(|p| p.method.has_springs() && !p.mass_form)
         {
             let ms = p
                 .slaves
@@ -91,7 +90,7 @@ impl ContactSet {
         for w in self
             .walls
             .iter()
-            .filter(|w| w.method == ContactMethod::Penalty && !w.mass_form)
+            .filter(|w| w.method.has_springs() && !w.mass_form)
         {
             let kt = tangential(w.friction, w.friction_stiffness);
             let omega2 = kt
@@ -367,4 +366,40 @@ pub fn penalty_impulse(
         (-g_trial / w).max(0.0)
     };
     (spring.min(bound), bound < spring)
+}
+
+/// The perturbed Lagrangian's penetration of a slave node (Belytschko X.5.8): the penetration
+/// `a` (> 0) of the node and, for each of its two surface segments, the segment's length and the
+/// penetration of its other end along the node's contact normal (negative: apart). With the
+/// multipliers interpolated by the surface's shape functions, H = (1/beta) int N^T N dGamma
+/// (Eq. X.5.44) is the consistent "mass" of the surface, and eliminating them (Eq. X.5.45) gives
+/// each node the consistent nodal force f_I = beta int N_I max(0, p(x)) dGamma of the linear
+/// penetration field p(x): no system to solve. With beta_I = k_I / int N_I dGamma over the part in
+/// contact, f_I = k_I times the value returned, the N_I-weighted mean of p over the node's
+/// contact support: a uniform penetration gives the penalty's force k a, a linear one the
+/// consistent nodal forces of the linear pressure beta p(x), where the penalty lumps them
+/// (f_I = k p_I). A segment of zero length (no neighbour) is skipped.
+pub fn consistent_penetration(a: f64, sides: [(f64, f64); 2]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (l, b) in sides {
+        if l.is_nan() || a.is_nan() || l <= 0.0 || a <= 0.0 {
+            continue;
+        }
+        if b >= 0.0 {
+            // int_0^1 (1 - s) (a + (b - a) s) ds and int_0^1 (1 - s) ds.
+            num += l * (2.0 * a + b) / 6.0;
+            den += l * 0.5;
+        } else {
+            // The penetration ends inside the segment, at s0 = a / (a - b).
+            let s0 = a / (a - b);
+            let c = b - a;
+            num += l * (a * s0 + (c - a) * s0 * s0 / 2.0 - c * s0 * s0 * s0 / 3.0);
+            den += l * (s0 - s0 * s0 / 2.0);
+        }
+    }
+    if den > 0.0 {
+        num / den
+    } else {
+        a
+    }
 }

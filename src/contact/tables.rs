@@ -10,8 +10,13 @@ use crate::scene::ContactMethod;
 pub struct SlotTable {
     /// Interface (contact or wall) index.
     pub interface: u32,
-    /// Penalty (else Lagrange).
+    /// Penalty springs (penalty or perturbed Lagrangian; else Lagrange).
     pub penalty: bool,
+    /// Perturbed Lagrangian: the spring acts on the consistent penetration (see
+    /// [`super::solve::consistent_penetration`]).
+    pub perturbed: bool,
+    /// The slots of the node's neighbours in the same pass (`u32::MAX`: none; walls: none).
+    pub neighbour_slots: [u32; 2],
     /// A wall's node (else a pass's slave node).
     pub wall: bool,
     /// The slave body is the interface's second body (its impulse counts negative).
@@ -85,10 +90,16 @@ impl ContactSet {
         let mut slots = Vec::new();
         let mut segments = Vec::new();
         for (pi, p) in self.passes.iter().enumerate() {
+            let base = slots.len() as u32;
             for (si, &s) in p.slaves.iter().enumerate() {
+                let neighbour_slots = p.neighbour_slaves.get(si).map_or([u32::MAX; 2], |n| {
+                    n.map(|j| if j == u32::MAX { j } else { base + j })
+                });
                 slots.push(SlotTable {
+                    neighbour_slots,
                     interface: p.interface as u32,
-                    penalty: p.method == ContactMethod::Penalty,
+                    penalty: p.method.has_springs(),
+                    perturbed: p.method == ContactMethod::PerturbedLagrange,
                     wall: false,
                     second_is_slave: !p.group && !p.slave_is_first,
                     node: s,
@@ -121,11 +132,13 @@ impl ContactSet {
             for (idx, &l) in w.nodes.iter().enumerate() {
                 slots.push(SlotTable {
                     interface: w.interface as u32,
-                    penalty: w.method == ContactMethod::Penalty,
+                    penalty: w.method.has_springs(),
+                    perturbed: w.method == ContactMethod::PerturbedLagrange,
                     wall: true,
                     second_is_slave: false,
                     node: l,
-                    neighbours: [l, l],
+                    neighbours: w.neighbours.get(idx).copied().unwrap_or([l, l]),
+                    neighbour_slots: [u32::MAX; 2],
                     normal: w.normal,
                     point: w.point,
                     stiffness: w.stiffness[idx],

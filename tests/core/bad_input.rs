@@ -1031,6 +1031,26 @@ fn bad_friction_names_the_key_and_value() {
         &text,
         &["contact[0].friction", "-1", ">= 0"],
     );
+    // The perturbed Lagrangian carries normal multipliers only.
+    expect_rejected(
+        "wall_friction_perturbed",
+        &wall("method = \"perturbed_lagrange\"\nfriction = 0.3"),
+        &["rigid_wall[0].friction", "0.3", "perturbed Lagrangian"],
+    );
+    expect_accepted(
+        "wall_perturbed",
+        &wall("method = \"perturbed_lagrange\"\npenalty_scale = 0.5"),
+        false,
+    );
+    expect_rejected(
+        "wall_method_unknown",
+        &wall("method = \"augmented\""),
+        &[
+            "rigid_wall[0].method",
+            "\"augmented\"",
+            "perturbed_lagrange",
+        ],
+    );
 }
 
 #[test]

@@ -458,3 +458,84 @@ fn gpu_allocates_contact_buffers_and_kernel_only_for_contact_scenes() {
         assert_eq!(gpu.state().contact.is_some(), contact);
     }
 }
+
+#[path = "../shared/perturbed_scene.rs"]
+mod perturbed_scene;
+
+/// Runs `text` to its end on the device (or the CPU reference, `ctx` None): the base nodes'
+/// penetrations ([`perturbed_scene::penetrations`]).
+fn settled_penetrations(ctx: Option<Arc<GpuContext>>, text: &str) -> [f64; 2] {
+    use ricochet::step::{Event, Solver};
+    let (scene, model, plan) = load(text, "perturbed.toml");
+    let mut solver: Box<dyn Solver> = match ctx {
+        Some(ctx) => {
+            Box::new(GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver"))
+        }
+        None => Box::new(CpuSolver::new(model.clone(), plan, schedule(&scene))),
+    };
+    let mut events = Vec::new();
+    'run: loop {
+        solver.advance(&mut events).expect("advance");
+        for ev in events.drain(..) {
+            match ev {
+                Event::Failed(f) => panic!("the run failed: {}", f.message),
+                Event::Done => break 'run,
+                _ => {}
+            }
+        }
+    }
+    let u = solver.displacement_now().expect("displacement");
+    perturbed_scene::penetrations(&model.position, &u)
+}
+
+/// The perturbed Lagrangian's consistent H on the device (see `tests/core/perturbed.rs`): on a
+/// wall and on a base (the node-to-segment path, each neighbour's gap from its own candidate
+/// segments), the off-centre quad's base tilts three times as much as under the penalty, as on the
+/// CPU, and the same bits twice.
+#[test]
+fn gpu_perturbed_lagrange_distributes_the_penalty_by_the_consistent_h() {
+    use perturbed_scene::*;
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for (what, scene) in [
+        ("wall", quad_on_wall as fn(&str, f64) -> String),
+        ("base", quad_on_base),
+    ] {
+        let (_, model, _) = load(&scene("penalty", 0.6), "perturbed.toml");
+        let r = reactions(&model.mass[..4], &model.position[..4]);
+        let rt = (r[0] - r[1]) / (r[0] + r[1]);
+        let text = scene("perturbed_lagrange", 0.6);
+        let pl = settled_penetrations(Some(ctx.clone()), &text);
+        let again = settled_penetrations(Some(ctx.clone()), &text);
+        let cpu = settled_penetrations(None, &text);
+        let pp = settled_penetrations(Some(ctx.clone()), &scene("penalty", 0.6));
+        eprintln!(
+            "gpu quad on a {what}: perturbed Lagrange p = {pl:?} m (CPU {cpu:?}), tilt {:.6} (3 x \
+             statics {:.6}); penalty tilt {:.6}",
+            tilt(pl),
+            3.0 * rt,
+            tilt(pp)
+        );
+        assert_eq!(
+            pl.map(f64::to_bits),
+            again.map(f64::to_bits),
+            "{what}: same bits"
+        );
+        for i in 0..2 {
+            assert!(
+                (pl[i] / cpu[i] - 1.0).abs() < 1e-4,
+                "{what}: {pl:?} against the CPU {cpu:?}"
+            );
+        }
+        assert!(
+            (tilt(pl) / (3.0 * rt) - 1.0).abs() < 1e-3,
+            "{what}: tilt {}",
+            tilt(pl)
+        );
+        assert!(
+            (tilt(pp) / rt - 1.0).abs() < 1e-3,
+            "{what}: penalty tilt {}",
+            tilt(pp)
+        );
+    }
+}

@@ -158,6 +158,10 @@ pub struct GpuSlot {
     pub mu: f32,
     /// Penalty friction: the tangential spring over the normal one.
     pub kt: f32,
+    /// Perturbed Lagrangian: the slots of the neighbours `np`, `nn` in the same pass (`NONE`:
+    /// none), whose candidate segments give their gaps.
+    pub ps: u32,
+    pub ns: u32,
     pub _pad: u32,
 }
 
@@ -178,7 +182,7 @@ pub const CONS_SIZE: u64 = 64;
 
 const _: () = assert!(std::mem::size_of::<ContactParams>() == 160);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 64);
-const _: () = assert!(std::mem::size_of::<GpuSlot>() == 56);
+const _: () = assert!(std::mem::size_of::<GpuSlot>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuSegment>() == 32);
 
 /// The compiled contact kernels and their layouts (stateless, built once per device).
@@ -465,7 +469,8 @@ impl ContactState {
                     | (u32::from(s.wall) << 17)
                     | (u32::from(s.second_is_slave) << 18)
                     | (u32::from(s.group) << 19)
-                    | (u32::from(s.self_contact) << 20),
+                    | (u32::from(s.self_contact) << 20)
+                    | (u32::from(s.perturbed) << 21),
                 s: s.node,
                 np: s.neighbours[0],
                 nn: s.neighbours[1],
@@ -476,6 +481,8 @@ impl ContactState {
                 body: s.body,
                 mu: s.friction as f32,
                 kt: s.friction_stiffness as f32,
+                ps: s.neighbour_slots[0],
+                ns: s.neighbour_slots[1],
                 _pad: 0,
             })
             .collect();
