@@ -27,6 +27,10 @@ struct Params {
     gravity_x: f32,       // run.gravity (m/s^2; the loads variant of the node stage applies it)
     gravity_y: f32,
     gravity_ramp: f32,    // s: linear ramp of gravity from 0 (0: none)
+    one: f32,             // 1.0, unknown to the compiler (node.wgsl's compensated sum)
+    _p0: u32,
+    _p1: u32,
+    _p2: u32,
 }
 
 // Run control, advanced on the GPU so that a step needs no readback.

@@ -65,8 +65,8 @@ struct ContactParams {
     o_act: u32,           // the step's Lagrange slots by colour (one-workgroup solve)
     o_mask: u32,          // colours taken per local node (one-workgroup solve's greedy colouring)
     f_rf: u32,            // fws offset: friction partials per slot run (with friction)
-    _p2: u32,
-    _p3: u32,
+    one: f32,             // 1.0, unknown to the compiler (report_end's compensated sums)
+    n_nodes: u32,         // v_prev[n_nodes + g]: node g's velocity residual (node.wgsl)
     f_box: u32,           // fws offsets: segment boxes
     f_usearch: u32,       // u at the last search per local node (xy)
     f_rp: u32,            // report partials per slot chunk start

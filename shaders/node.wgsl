@@ -2,6 +2,11 @@
 // deterministic), then the central-difference update v^{n+1/2} = v^{n-1/2} + dt_n f / m and
 // u_{n+1} = u_n + dt^{n+1/2} v^{n+1/2}; on sample steps also the node's kinetic energy
 // 1/2 m v^{n-1/2} . v^{n+1/2} and momentum. Mirrors CpuSolver::step (stages 3 to 5).
+// The velocity update is a compensated sum: the increment dt_n f / m is about 1e-4 of v in a long
+// run, and f32 rounds it by up to half an ulp of v every step, the same way over thousands of
+// steps (a free fall drifted 2e-4 from g t in 27 000 steps); each node carries the rounding residual
+// of its last update (v_prev[n_nodes + i]) into the next increment (Kahan), so that the drift
+// stays at one ulp.
 
 override WG: u32 = 64u;
 
@@ -11,7 +16,7 @@ override WG: u32 = 64u;
 @group(0) @binding(3) var<storage, read> adj_offsets: array<u32>;     // n_nodes + 1
 @group(0) @binding(4) var<storage, read> adj_slots: array<u32>;       // 4 e + corner
 @group(0) @binding(5) var<storage, read> elem_force: array<vec2<f32>>;
-@group(0) @binding(6) var<storage, read_write> v_prev: array<vec2<f32>>;
+@group(0) @binding(6) var<storage, read_write> v_prev: array<vec2<f32>>;  // v^{n-1/2}, then residuals
 @group(0) @binding(7) var<storage, read_write> ctrl: Control;
 @group(0) @binding(8) var<storage, read_write> sample_src: array<vec4<f32>>;
 //#if fields
@@ -56,10 +61,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // Gravity: the force m g (loads.wgsl sums its work with the pressure's).
     f += gravity_now() / inv_mass[i];
     let c = ctrl.damp_c;
-    let vp = ((1.0 - c) / (1.0 + c)) * vm + (ctrl.dt_node * inv_mass[i] / (1.0 + c)) * f;
+    // v+ - v- = -2c / (1 + c) v- + dt_n f / (m (1 + c)).
+    let inc = (-2.0 * c / (1.0 + c)) * vm + (ctrl.dt_node * inv_mass[i] / (1.0 + c)) * f;
 //#else
-    let vp = vm + (ctrl.dt_node * inv_mass[i]) * f;
+    let inc = (ctrl.dt_node * inv_mass[i]) * f;
 //#endif
+    // Kahan: v+ = v- + (inc + the last residual), and the new residual y - (v+ - v-); v- enters
+    // the subtraction as v- * params.one, which the compiler cannot fold away.
+    let r = params.n_nodes + i;
+    let y = inc + v_prev[r];
+    let vp = vm + y;
+    v_prev[r] = y - (vp - vm * params.one);
     if (not_finite(vp.x) || not_finite(vp.y)) {
         atomicMin(&ctrl.bad_node, i);
     }

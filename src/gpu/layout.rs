@@ -33,6 +33,10 @@ pub struct Params {
     pub gravity_x: f32,
     pub gravity_y: f32,
     pub gravity_ramp: f32,
+    /// 1.0, read at run time: node.wgsl's compensated sum subtracts v * one so that a compiler
+    /// that reassociates floating point (Mesa's NIR, a driver's) cannot fold (v + y) - v to y.
+    pub one: f32,
+    pub _pad: [u32; 3],
 }
 
 /// Mirror of WGSL `Control`: the run state advanced on the GPU.
@@ -146,7 +150,7 @@ pub const STATE_FAILED: u32 = 3;
 /// "No index" marker.
 pub const NONE: u32 = u32::MAX;
 
-const _: () = assert!(std::mem::size_of::<Params>() == 96);
+const _: () = assert!(std::mem::size_of::<Params>() == 112);
 const _: () = assert!(std::mem::size_of::<Control>() == 84);
 const _: () = assert!(std::mem::size_of::<Instance>() == 32);
 const _: () = assert!(std::mem::size_of::<GpuBody>() == 80);

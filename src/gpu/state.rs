@@ -367,6 +367,8 @@ impl GpuState {
             gravity_x: model.gravity[0] as f32,
             gravity_y: model.gravity[1] as f32,
             gravity_ramp: model.gravity_ramp as f32,
+            one: 1.0,
+            _pad: [0; 3],
             loads: u32::from(has_loads),
             plastic: u32::from(plastic),
             inst_groups: if fused {
@@ -432,7 +434,10 @@ impl GpuState {
                 storage | U::COPY_SRC | U::COPY_DST,
             )
         });
-        let v_prev = a.zeroed("v_prev", 8 * nn as u64, storage | U::COPY_SRC);
+        // v^{n-1/2} per node, then the f32 rounding residual of each node's last velocity update
+        // (node.wgsl's compensated sum, joined by the contact's corrections), carried to the next
+        // step (and in the checkpoint like every allocated buffer).
+        let v_prev = a.zeroed("v_prev", 16 * nn as u64, storage | U::COPY_SRC);
         let u_snap =
             has_fields.then(|| a.zeroed("u_snapshot", 8 * nn as u64, storage | U::COPY_SRC));
         let cons: Vec<GpuConstraint> = model

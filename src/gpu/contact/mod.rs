@@ -106,8 +106,11 @@ pub struct ContactParams {
     pub o_act: u32,
     pub o_mask: u32,
     pub f_rf: u32,
-    pub _p2: u32,
-    pub _p3: u32,
+    /// 1.0, read at run time (the report's compensated work sums; see `Params::one`).
+    pub one: f32,
+    /// Nodes of the model: `v_prev`'s second half (from this index) holds node.wgsl's velocity
+    /// residuals, which the contact's corrections join.
+    pub n_nodes: u32,
     pub f_box: u32,
     pub f_usearch: u32,
     pub f_rp: u32,
@@ -547,6 +550,8 @@ impl ContactState {
             adj_capacity: n_slots + 2 * cand_capacity,
             jp_rounds: FIRST_ROUNDS,
             colors_recorded: if multi { 8 } else { 0 },
+            one: 1.0,
+            n_nodes: model.node_count() as u32,
             tolerance: (solve::TOLERANCE * t.margin) as f32,
             friction: u32::from(friction),
             ..Default::default()
@@ -607,7 +612,7 @@ impl ContactState {
         );
         let history = alloc.init(
             "contact_history",
-            &vec![0u8; 4 * (row_capacity * hist_stride + 4 * (ni + 1)) as usize],
+            &vec![0u8; 4 * (row_capacity * hist_stride + 4 * (ni + 2)) as usize],
             st | U::COPY_SRC,
         );
         let ind = alloc.init(
