@@ -920,6 +920,21 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             },
             c.margin()
         );
+        // How the tables and walls enforce contact (counts per method, in the scene's words).
+        let mut methods: Vec<(&str, usize)> = Vec::new();
+        for m in model
+            .contacts
+            .iter()
+            .map(|c| c.method)
+            .chain(model.walls.iter().map(|w| w.method))
+        {
+            match methods.iter_mut().find(|(w, _)| *w == m.word()) {
+                Some((_, n)) => *n += 1,
+                None => methods.push((m.word(), 1)),
+            }
+        }
+        let methods: Vec<String> = methods.iter().map(|(w, n)| format!("{w} {n}")).collect();
+        println!("  methods  {}", methods.join(", "));
         match c.penalty_step() {
             Some((dp, what)) => println!(
                 "  penalty  {what} alone allows {dp:.4e} s; with the elements {dt:.4e} s: {}",

@@ -95,3 +95,23 @@ fn perturbed_lagrange_distributes_the_penalty_by_the_consistent_h() {
         }
     }
 }
+
+#[test]
+fn check_names_each_contact_method() {
+    let dir = tmp_dir("perturbed_check");
+    let path = dir.join("quad.toml");
+    std::fs::write(&path, quad_on_base("perturbed_lagrange", 0.6)).expect("write");
+    let out = run_bin(&["check", path.to_str().expect("utf-8 path")]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    // The base's contact (no wall): one table, perturbed Lagrange.
+    assert!(text.contains("  methods  perturbed_lagrange 1"), "{text}");
+    let wall = quad_on_wall("penalty", 0.6).replace(
+        "[[rigid_wall]]",
+        "[[body]]\nname = \"other\"\nmaterial = \"steel\"\nmesh = { rectangle = { origin = [3.0, 0.0], size = [1.0, 1.0], cells = [1, 1] } }\n\n[[contact]]\nbodies = [\"block\", \"other\"]\n\n[[rigid_wall]]",
+    );
+    std::fs::write(&path, wall).expect("write");
+    let out = run_bin(&["check", path.to_str().expect("utf-8 path")]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("  methods  lagrange 1, penalty 1"), "{text}");
+}
