@@ -495,7 +495,8 @@ impl ContactSet {
                         }
                         let rate = dot(self.v_free[l as usize], n);
                         let (gs, gs_tr) = if w.method == ContactMethod::PerturbedLagrange {
-                            let gs = self.consistent_gap(l, w.neighbours[idx], n, g);
+                            let nb = w.neighbours.get(idx).copied().unwrap_or([l, l]);
+                            let gs = self.consistent_gap(l, nb, n, g);
                             (gs, gs + dt * rate)
                         } else {
                             (g, g_tr)
