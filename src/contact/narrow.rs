@@ -326,22 +326,7 @@ impl ContactSet {
                 if p.method.has_springs() {
                     let rate = self.free_relative(s, Some((a, b)), pr.xi, pr.normal);
                     let g = if p.method == ContactMethod::PerturbedLagrange {
-                        let sides = [0, 1].map(|i| {
-                            let sj = p
-                                .neighbour_slaves
-                                .get(si as usize)
-                                .map_or(u32::MAX, |n| n[i]);
-                            if sj == u32::MAX {
-                                return None;
-                            }
-                            let gj = self.slave_gap(p, sj)?;
-                            let d = sub(
-                                self.x_n[p.slaves[sj as usize] as usize],
-                                self.x_n[s as usize],
-                            );
-                            Some((d[0].hypot(d[1]), -gj))
-                        });
-                        -consistent_penetration(-pr.gap, sides.map(|x| x.unwrap_or((0.0, 0.0))))
+                        self.consistent_pass_gap(p, si, pr.gap)
                     } else {
                         pr.gap
                     };
@@ -425,6 +410,30 @@ impl ContactSet {
             }
         }
         best
+    }
+
+    /// The perturbed Lagrangian's gap of the pass's slave `si` (a position in `slaves`) at gap
+    /// `g` (< 0): minus the [`consistent_penetration`] over its two surface segments, each
+    /// neighbour's penetration its own [`Self::slave_gap`] (a side without one is left out).
+    fn consistent_pass_gap(&self, p: &Pass, si: u32, g: f64) -> f64 {
+        let x = self.x_n[p.slaves[si as usize] as usize];
+        let sides = [0, 1].map(|i| {
+            let sj = p
+                .neighbour_slaves
+                .get(si as usize)
+                .map_or(u32::MAX, |n| n[i]);
+            if sj == u32::MAX {
+                return (0.0, 0.0);
+            }
+            match self.slave_gap(p, sj) {
+                Some(gj) => {
+                    let d = sub(self.x_n[p.slaves[sj as usize] as usize], x);
+                    (d[0].hypot(d[1]), -gj)
+                }
+                None => (0.0, 0.0),
+            }
+        });
+        -consistent_penetration(-g, sides)
     }
 
     /// The perturbed Lagrangian's gap of wall node `s` at gap `g` (< 0) along the wall's normal
