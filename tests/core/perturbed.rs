@@ -2,8 +2,6 @@
 //! consistent H distributing the penalty along the surface (see `tests/shared/perturbed_scene.rs`).
 
 use ricochet::run::schedule;
-use ricochet::step::cpu::CpuSolver;
-use ricochet::step::{Event, Solver};
 
 use crate::common::*;
 
@@ -11,27 +9,18 @@ use crate::common::*;
 pub mod perturbed_scene;
 use perturbed_scene::*;
 
-/// Runs the quad of `top` with `method` to rest: (penetrations of the base nodes, reactions from
+/// Runs the scene `text` (a quad with `method`) to rest: (penetrations of the base nodes, reactions from
 /// statics, kinetic over strain energy at the end).
 fn settle(text: &str, method: &str) -> ([f64; 2], [f64; 2], f64) {
     let (scene, model, plan) = build(text);
-    let mut solver = CpuSolver::new(model.clone(), plan, schedule(&scene));
-    let mut events = Vec::new();
-    let mut last = None;
-    'run: loop {
-        solver.advance(&mut events).expect("CPU solver");
-        for ev in events.drain(..) {
-            match ev {
-                Event::Sample(s) => last = Some(s),
-                Event::Failed(f) => panic!("{method}: the run failed: {}", f.message),
-                Event::Done => break 'run,
-                Event::Snapshot(_) => {}
-            }
-        }
+    let mut run = Stepper::new(model.clone(), plan, schedule(&scene));
+    while run.advance() {}
+    if let Some(f) = &run.failure {
+        panic!("{method}: the run failed: {}", f.message);
     }
-    let last = last.expect("samples");
+    let last = run.samples.last().expect("samples");
     (
-        penetrations(&model.position, solver.displacement()),
+        penetrations(&model.position, run.solver.displacement()),
         reactions(&model.mass[..4], &model.position[..4]),
         last.kinetic / last.internal,
     )
