@@ -118,7 +118,7 @@ struct Slot {
     kt: f32,              // penalty friction: the tangential spring over the normal one
     ps: u32,              // perturbed Lagrangian: the slots of np, nn in the same pass (NONE: none)
     ns: u32,
-    _pad: u32,
+    ar: f32,              // augmented Lagrangian: the multipliers' update rate (1/s; 0: none)
 }
 
 struct Segment {
@@ -149,7 +149,8 @@ struct Cons {
     wt: f32,              // (1/m_s + (1-xi)^2/m_a + xi^2/m_b) along t = (-n_y, n_x); penalty
                           // before its friction: the spring stiffness
     lt: f32,              // friction impulse along t, |lt| <= mu lambda
-    ft: f32,              // penalty friction: the tangential spring force, kept for the next step
+    ft: f32,              // kept for the next step: penalty friction's tangential spring force, or
+                          // the augmented Lagrangian's multiplier (a force; it has no friction)
 }
 
 @group(0) @binding(1) var<storage, read_write> ctrl: Control;

@@ -42,6 +42,23 @@ fn penalty_impulse(k: f32, g: f32, rate: f32, g_trial: f32, w: f32, dt: f32, dtn
     return vec2<f32>(min(spring, bound), select(0.0, 1.0, bound < spring));
 }
 
+// The augmented Lagrangian's impulse (crate::contact::solve::augmented_impulse): for a spring k at
+// gap g carrying the multiplier `lambda` of the last step, (impulse, next multiplier, 1 where the
+// spring's bound acted, 1 in contact); not in contact (the multiplier dropped) while
+// lambda - k g <= 0. The next multiplier is Uzawa's update at the rate r: lambda + r dt_n k (-g).
+fn augmented_impulse(k: f32, g: f32, rate: f32, g_trial: f32, lambda: f32, w: f32, dt: f32, dtn: f32,
+                     r: f32) -> vec4<f32> {
+    if (!(lambda - k * g > 0.0)) {
+        return vec4<f32>(0.0);
+    }
+    var spring = vec2<f32>(-dtn * k * g, 0.0);
+    if (g < 0.0) {
+        spring = penalty_impulse(k, g, rate, g_trial, w, dt, dtn);
+    }
+    let next = max(lambda - r * dtn * k * g, 0.0);
+    return vec4<f32>(dtn * lambda + spring.x, next, spring.y, 1.0);
+}
+
 // The perturbed Lagrangian's penetration of a slave node (crate::contact::consistent_penetration):
 // its penetration a (> 0) and, per surface segment, (length, the other end's penetration along
 // the node's normal); the N_I-weighted mean of the linear penetration over the contact support.
@@ -157,7 +174,7 @@ struct Qual {
     len: f32,
 }
 
-fn qualify(s: u32, own: vec2<f32>, j: u32, penalty: bool) -> Qual {
+fn qualify(s: u32, own: vec2<f32>, j: u32, penalty: bool, carried: f32) -> Qual {
     var r: Qual;
     r.ok = false;
     let sg = segs[j];
@@ -184,7 +201,12 @@ fn qualify(s: u32, own: vec2<f32>, j: u32, penalty: bool) -> Qual {
     let n = vec2<f32>(t.y, -t.x) / len;
     let gap = dot(d, n);
     if (penalty) {
-        if (!(gap < 0.0 && gap > -0.5 * len)) {
+        // (The augmented Lagrangian's node stays in contact up to the gap carried / k.)
+        var reach = 0.0;
+        if (carried > 0.0) {
+            reach = carried / sg.k;
+        }
+        if (!(gap < reach && gap > -0.5 * len)) {
             return r;
         }
         r.k0 = gap;
@@ -281,7 +303,7 @@ fn with_friction(c0: Cons, sl: Slot, inv_scale: f32) -> Cons {
     return c;
 }
 
-fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
+fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32) -> Cons {
     var c = no_constraint();
     let s = sl.s;
     let penalty = (sl.info & SLOT_PENALTY) != 0u;
@@ -294,7 +316,7 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
     let end = ws[cc.p.o_coff + k + 1u];
     for (var q = begin; q < end; q++) {
         let j = grow[q];
-        let r = qualify(s, own, j, penalty);
+        let r = qualify(s, own, j, penalty, carried);
         if (r.ok && (!found || r.k0 > best.k0 || (r.k0 == best.k0 && r.k1 > best.k1))) {
             found = true;
             best = r;
@@ -321,7 +343,7 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
         } else {
             continue;
         }
-        let r = qualify(s, own, j2, penalty);
+        let r = qualify(s, own, j2, penalty, carried);
         if (!r.ok) {
             continue;
         }
@@ -365,17 +387,27 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
             g = consistent_pass_gap(sl, best_gap);
         }
         let g_trial = g + dt * rate;
-        let imp = penalty_impulse(sg.k, g, rate, g_trial, w, dt, dtn);
-        c.lambda = imp.x;
-        c.dt_warm = -imp.y;
-        c.pen = -best_gap;
+        if (sl.ar > 0.0) {
+            let a = augmented_impulse(sg.k, g, rate, g_trial, carried, w, dt, dtn, sl.ar);
+            if (a.w == 0.0) {
+                return no_constraint();
+            }
+            c.lambda = a.x;
+            c.ft = a.y;
+            c.dt_warm = -a.z;
+        } else {
+            let imp = penalty_impulse(sg.k, g, rate, g_trial, w, dt, dtn);
+            c.lambda = imp.x;
+            c.dt_warm = -imp.y;
+        }
+        c.pen = max(-best_gap, 0.0);
         c.kind = KIND_PENALTY;
         c.wt = sg.k;
     }
     return c;
 }
 
-fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
+fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32) -> Cons {
     var c = no_constraint();
     let s = sl.s;
     let n = sl.normal;
@@ -395,7 +427,7 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
         if (g_tr < 0.0) {
             c.kind = KIND_LAGRANGE;
         }
-    } else if (g < 0.0) {
+    } else if (g < select(0.0, carried / sl.k, carried > 0.0)) {
         let rate = dot(vel(s).xy, n);
         var gs = g;
         var gs_tr = g_tr;
@@ -403,22 +435,33 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
             gs = consistent_gap(sl, n, g);
             gs_tr = gs + dt * rate;
         }
-        let imp = penalty_impulse(sl.k, gs, rate, gs_tr, w, dt, dtn);
-        c.lambda = imp.x;
-        c.dt_warm = -imp.y;
-        c.pen = -g;
+        if (sl.ar > 0.0) {
+            let a = augmented_impulse(sl.k, gs, rate, gs_tr, carried, w, dt, dtn, sl.ar);
+            if (a.w == 0.0) {
+                return no_constraint();
+            }
+            c.lambda = a.x;
+            c.ft = a.y;
+            c.dt_warm = -a.z;
+        } else {
+            let imp = penalty_impulse(sl.k, gs, rate, gs_tr, w, dt, dtn);
+            c.lambda = imp.x;
+            c.dt_warm = -imp.y;
+        }
+        c.pen = max(-g, 0.0);
         c.kind = KIND_PENALTY;
         c.wt = sl.k;
     }
     return c;
 }
 
-fn narrow_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> Cons {
+// `carried`: the augmented Lagrangian's multiplier of the slot's last step (0: none).
+fn narrow_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32, carried: f32) -> Cons {
     let sl = slots[k];
     if ((sl.info & SLOT_WALL) != 0u) {
-        return with_friction(narrow_wall(sl, dt, dtn, inv_scale), sl, inv_scale);
+        return with_friction(narrow_wall(sl, dt, dtn, inv_scale, carried), sl, inv_scale);
     }
-    return with_friction(narrow_pass(k, sl, dt, dtn, inv_scale), sl, inv_scale);
+    return with_friction(narrow_pass(k, sl, dt, dtn, inv_scale, carried), sl, inv_scale);
 }
 
 // The narrow phase of every slot, with the warm start (as on the CPU): a Lagrange constraint of a
@@ -431,9 +474,13 @@ fn narrow(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let dt = ctrl.dt_next;
     let dtn = ctrl.dt_node;
-    var c = narrow_slot(k, dt, dtn, inv_mass_scale());
     let old = cons[k];
     let sl = slots[k];
+    var carried = 0.0;
+    if (sl.ar > 0.0 && old.kind == KIND_PENALTY) {
+        carried = old.ft;
+    }
+    var c = narrow_slot(k, dt, dtn, inv_mass_scale(), carried);
     if (c.kind == KIND_PENALTY && sl.mu > 0.0) {
         c = penalty_friction(c, sl, old, dt, dtn, inv_mass_scale());
     }

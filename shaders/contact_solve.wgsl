@@ -206,7 +206,7 @@ fn recheck_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> bool {
         return false;
     }
     corr_dt = dt;
-    var c = narrow_slot(k, dt, dtn, inv_scale);
+    var c = narrow_slot(k, dt, dtn, inv_scale, 0.0);
     corr_dt = 0.0;
     if (c.kind != KIND_LAGRANGE) {
         return false;

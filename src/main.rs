@@ -935,6 +935,26 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
         }
         let methods: Vec<String> = methods.iter().map(|(w, n)| format!("{w} {n}")).collect();
         println!("  methods  {}", methods.join(", "));
+        let rates: Vec<String> = model
+            .contacts
+            .iter()
+            .map(|c| (&c.name, c.method, c.augmentation_rate))
+            .chain(
+                model
+                    .walls
+                    .iter()
+                    .map(|w| (&w.name, w.method, w.augmentation_rate)),
+            )
+            .filter(|(_, m, _)| *m == ricochet::scene::ContactMethod::AugmentedLagrange)
+            .map(|(n, _, r)| format!("{n} {r} /s"))
+            .collect();
+        if !rates.is_empty() {
+            println!(
+                "  augment  multipliers updated at (run.mass_damping = {} /s): {}",
+                scene.run.mass_damping,
+                rates.join(", ")
+            );
+        }
         match c.penalty_step() {
             Some((dp, what)) => println!(
                 "  penalty  {what} alone allows {dp:.4e} s; with the elements {dt:.4e} s: {}",
@@ -979,9 +999,8 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
                         format!("penalty, regularized, k_t = {kt} k")
                     }
                     // Refused by the scene reader (normal multipliers only).
-                    ricochet::scene::ContactMethod::PerturbedLagrange => {
-                        "perturbed lagrange".to_string()
-                    }
+                    m @ (ricochet::scene::ContactMethod::PerturbedLagrange
+                    | ricochet::scene::ContactMethod::AugmentedLagrange) => m.word().to_string(),
                 };
                 format!("{n} mu = {mu} ({how})")
             })

@@ -156,6 +156,7 @@ struct RawContact {
     surfaces: Option<Vec<String>>,
     friction: Option<f64>,
     friction_stiffness: Option<f64>,
+    augmentation_rate: Option<f64>,
 }
 
 /// The penalty and friction keys of a `[[contact]]` or `[[rigid_wall]]` as written.
@@ -164,6 +165,7 @@ struct RawSprings<'a> {
     scale: Option<f64>,
     friction: Option<f64>,
     friction_stiffness: Option<f64>,
+    augmentation_rate: Option<f64>,
 }
 
 /// The penalty and friction keys of a contact or wall, checked, with their defaults.
@@ -172,6 +174,7 @@ struct Springs {
     scale: f64,
     friction: f64,
     friction_stiffness: f64,
+    augmentation_rate: f64,
 }
 
 /// `bodies` of a `[[contact]]`: the string "all" or a list of names.
@@ -196,6 +199,7 @@ struct RawWall {
     penalty_stiffness: Option<String>,
     friction: Option<f64>,
     friction_stiffness: Option<f64>,
+    augmentation_rate: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -594,15 +598,22 @@ pub enum ContactMethod {
     /// the penalty distributed by the consistent H, each node's force the consistent nodal force
     /// beta int N_I g of the penetration field, instead of k g node by node.
     PerturbedLagrange,
+    /// Augmented Lagrangian (Belytschko X.5.7): the penalty spring plus a multiplier per contact
+    /// node, carried from step to step and augmented by the spring's force (Uzawa's update
+    /// lambda <- lambda + k g, at the rate `augmentation_rate`), so that a persistent contact
+    /// ends with no penetration while the stable step is the (soft) spring's.
+    AugmentedLagrange,
 }
 
 impl ContactMethod {
-    /// Whether the method acts through penalty springs (penalty, perturbed Lagrangian): the
-    /// penalty keys apply, and the springs count in the stable step.
+    /// Whether the method acts through penalty springs (penalty, perturbed and augmented
+    /// Lagrangian): the penalty keys apply, and the springs count in the stable step.
     pub fn has_springs(self) -> bool {
         matches!(
             self,
-            ContactMethod::Penalty | ContactMethod::PerturbedLagrange
+            ContactMethod::Penalty
+                | ContactMethod::PerturbedLagrange
+                | ContactMethod::AugmentedLagrange
         )
     }
 
@@ -612,6 +623,7 @@ impl ContactMethod {
             ContactMethod::Lagrange => "lagrange",
             ContactMethod::Penalty => "penalty",
             ContactMethod::PerturbedLagrange => "perturbed_lagrange",
+            ContactMethod::AugmentedLagrange => "augmented_lagrange",
         }
     }
 }
@@ -643,6 +655,10 @@ pub const DEFAULT_PENALTY_FORM: PenaltyForm = PenaltyForm::Modulus;
 
 /// Default penalty scale `s` of the modulus form, k = s K t L^2 / A.
 pub const DEFAULT_PENALTY_SCALE: f64 = 2.0;
+
+/// Default `augmentation_rate` of the augmented Lagrangian as a fraction of `run.mass_damping`
+/// alpha: half the stability limit r < alpha (see [`ContactMethod::AugmentedLagrange`]).
+pub const DEFAULT_AUGMENTATION: f64 = 0.5;
 
 /// Default penalty scale `s` of the mass form, k = s m* / dt^2.
 pub const DEFAULT_MASS_PENALTY_SCALE: f64 = 0.1;
@@ -682,6 +698,10 @@ pub struct Contact {
     pub surfaces: Option<Vec<(String, Vec<[u32; 2]>)>>,
     /// Coulomb friction coefficient mu (0: frictionless).
     pub friction: f64,
+    /// Augmented Lagrangian: the rate r (1/s) of the multipliers' update, lambda <- lambda +
+    /// r dt k (-g) each step (`augmentation_rate`, default half of `run.mass_damping`; below it,
+    /// see [`DEFAULT_AUGMENTATION`]); 0 for the other methods.
+    pub augmentation_rate: f64,
 }
 
 /// A fixed planar rigid wall.
@@ -706,6 +726,10 @@ pub struct RigidWall {
     pub friction_stiffness: f64,
     /// Coulomb friction coefficient mu (0: frictionless).
     pub friction: f64,
+    /// Augmented Lagrangian: the rate r (1/s) of the multipliers' update, lambda <- lambda +
+    /// r dt k (-g) each step (`augmentation_rate`, default half of `run.mass_damping`; below it,
+    /// see [`DEFAULT_AUGMENTATION`]); 0 for the other methods.
+    pub augmentation_rate: f64,
 }
 
 /// A pressure (traction) load on the boundary edges of a body inside a box.
@@ -1024,7 +1048,7 @@ impl Validator<'_> {
         for (i, c) in raw.contact.iter().enumerate() {
             let key = format!("contact[{i}]");
             // Two contacts with one default name are the same contact given twice: refused.
-            let c = self.contact(&key, c, &bodies)?;
+            let c = self.contact(&key, c, &bodies, run.mass_damping)?;
             self.unique_name(&key, &c.name, &contacts, &[])?;
             contacts.push(c);
         }
@@ -1033,7 +1057,7 @@ impl Validator<'_> {
             let key = format!("rigid_wall[{i}]");
             // A wall's default name (its bodies joined by `-`) may be a contact's: suffixed.
             let named = w.name.is_some();
-            let mut w = self.wall(&key, w, &bodies)?;
+            let mut w = self.wall(&key, w, &bodies, run.mass_damping)?;
             if !named {
                 w.name = free_name(&w.name, &contacts, &walls);
             }
@@ -1150,16 +1174,24 @@ impl Validator<'_> {
             None | Some("lagrange") => Ok(ContactMethod::Lagrange),
             Some("penalty") => Ok(ContactMethod::Penalty),
             Some("perturbed_lagrange") => Ok(ContactMethod::PerturbedLagrange),
+            Some("augmented_lagrange") => Ok(ContactMethod::AugmentedLagrange),
             Some(other) => Err(self.invalid(
                 key,
                 format!("{other:?}"),
-                "expected \"lagrange\", \"penalty\" or \"perturbed_lagrange\"",
+                "expected \"lagrange\", \"penalty\", \"perturbed_lagrange\" or \
+                 \"augmented_lagrange\"",
             )),
         }
     }
 
     /// The penalty and friction keys of contact or wall `key` with `method`.
-    fn springs(&self, key: &str, method: ContactMethod, raw: RawSprings) -> Result<Springs> {
+    fn springs(
+        &self,
+        key: &str,
+        method: ContactMethod,
+        raw: RawSprings,
+        mass_damping: f64,
+    ) -> Result<Springs> {
         let form = self.penalty_form(&format!("{key}.penalty_stiffness"), raw.form, method)?;
         let scale = self.penalty_scale(&format!("{key}.penalty_scale"), raw.scale, method, form)?;
         let friction = self.friction(&format!("{key}.friction"), raw.friction, method)?;
@@ -1169,12 +1201,66 @@ impl Validator<'_> {
             method,
             friction,
         )?;
+        let augmentation_rate =
+            self.augmentation_rate(key, raw.augmentation_rate, method, mass_damping)?;
         Ok(Springs {
             form,
             scale,
             friction,
             friction_stiffness,
+            augmentation_rate,
         })
+    }
+
+    /// `augmentation_rate` of an augmented Lagrangian contact or wall `key`: in (0,
+    /// run.mass_damping), default [`DEFAULT_AUGMENTATION`] times it. The update
+    /// lambda' = r k (-g) integrates the penetration: on a body m x'' + alpha m x' + k x + lambda
+    /// = 0 it is stable only while r < alpha (Routh-Hurwitz on m s^3 + alpha m s^2 + k s + r k);
+    /// without mass damping its oscillations grow at r / 2.
+    fn augmentation_rate(
+        &self,
+        key: &str,
+        r: Option<f64>,
+        method: ContactMethod,
+        mass_damping: f64,
+    ) -> Result<f64> {
+        if method != ContactMethod::AugmentedLagrange {
+            return match r {
+                None => Ok(0.0),
+                Some(x) => Err(self.invalid(
+                    format!("{key}.augmentation_rate"),
+                    fmt_num(x),
+                    "applies to method = \"augmented_lagrange\" only",
+                )),
+            };
+        }
+        if mass_damping <= 0.0 {
+            return Err(self.invalid(
+                format!("{key}.method"),
+                "\"augmented_lagrange\"",
+                "needs run.mass_damping > 0: the multipliers' update integrates the \
+                 penetration, which is stable only under mass damping (augmentation_rate < \
+                 run.mass_damping)",
+            ));
+        }
+        match r {
+            None => Ok(DEFAULT_AUGMENTATION * mass_damping),
+            Some(x) => {
+                let x = self.positive(&format!("{key}.augmentation_rate"), x)?;
+                if x >= mass_damping {
+                    return Err(self.invalid(
+                        format!("{key}.augmentation_rate"),
+                        fmt_num(x),
+                        &format!(
+                            "must be below run.mass_damping = {}: the multipliers' update is \
+                             unstable at or above it",
+                            fmt_num(mass_damping)
+                        ),
+                    ));
+                }
+                Ok(x)
+            }
+        }
     }
 
     /// The form of the penalty stiffness (`penalty_stiffness`), penalty only.
@@ -1200,7 +1286,7 @@ impl Validator<'_> {
             return Err(self.invalid(
                 key,
                 format!("{:?}", f.word()),
-                "applies to method = \"penalty\" or \"perturbed_lagrange\" only",
+                "applies to the spring methods only (\"penalty\", \"perturbed_lagrange\", \"augmented_lagrange\")",
             ));
         }
         Ok(f)
@@ -1239,7 +1325,7 @@ impl Validator<'_> {
             Some(_) if !method.has_springs() => Err(self.invalid(
                 key,
                 format!("{:?}", s.unwrap_or_default()),
-                "applies to method = \"penalty\" or \"perturbed_lagrange\" only",
+                "applies to the spring methods only (\"penalty\", \"perturbed_lagrange\", \"augmented_lagrange\")",
             )),
             Some(x) => self.positive(key, x),
         }
@@ -1249,18 +1335,36 @@ impl Validator<'_> {
     /// method that carries it (not the perturbed Lagrangian, whose multipliers are normal only).
     fn friction(&self, key: &str, mu: Option<f64>, method: ContactMethod) -> Result<f64> {
         let mu = mu.map_or(Ok(0.0), |mu| self.non_negative(key, mu))?;
-        if mu > 0.0 && method == ContactMethod::PerturbedLagrange {
+        if mu > 0.0
+            && matches!(
+                method,
+                ContactMethod::PerturbedLagrange | ContactMethod::AugmentedLagrange
+            )
+        {
             return Err(self.invalid(
                 key,
                 fmt_num(mu),
-                "friction needs method = \"lagrange\" or \"penalty\": the perturbed Lagrangian \
-                 carries normal multipliers only",
+                &format!(
+                    "friction needs method = \"lagrange\" or \"penalty\": the {} carries \
+                     normal multipliers only",
+                    if method == ContactMethod::PerturbedLagrange {
+                        "perturbed Lagrangian"
+                    } else {
+                        "augmented Lagrangian"
+                    }
+                ),
             ));
         }
         Ok(mu)
     }
 
-    fn contact(&self, key: &str, c: &RawContact, bodies: &[Body]) -> Result<Contact> {
+    fn contact(
+        &self,
+        key: &str,
+        c: &RawContact,
+        bodies: &[Body],
+        mass_damping: f64,
+    ) -> Result<Contact> {
         let bkey = format!("{key}.bodies");
         let self_contact = c.self_contact.unwrap_or(false);
         let (list, all) = match &c.bodies {
@@ -1322,6 +1426,7 @@ impl Validator<'_> {
             scale: penalty_scale,
             friction,
             friction_stiffness,
+            augmentation_rate,
         } = self.springs(
             key,
             method,
@@ -1330,7 +1435,9 @@ impl Validator<'_> {
                 scale: c.penalty_scale,
                 friction: c.friction,
                 friction_stiffness: c.friction_stiffness,
+                augmentation_rate: c.augmentation_rate,
             },
+            mass_damping,
         )?;
         let names: Vec<&str> = list.iter().map(|&i| bodies[i].name.as_str()).collect();
         let default = if !group {
@@ -1406,10 +1513,17 @@ impl Validator<'_> {
             friction_stiffness,
             surfaces,
             friction,
+            augmentation_rate,
         })
     }
 
-    fn wall(&self, key: &str, w: &RawWall, bodies: &[Body]) -> Result<RigidWall> {
+    fn wall(
+        &self,
+        key: &str,
+        w: &RawWall,
+        bodies: &[Body],
+        mass_damping: f64,
+    ) -> Result<RigidWall> {
         self.given_name_length(key, w.name.as_ref())?;
         for i in 0..2 {
             self.finite(&format!("{key}.point"), w.point[i])?;
@@ -1450,6 +1564,7 @@ impl Validator<'_> {
             scale: penalty_scale,
             friction,
             friction_stiffness,
+            augmentation_rate,
         } = self.springs(
             key,
             method,
@@ -1458,7 +1573,9 @@ impl Validator<'_> {
                 scale: w.penalty_scale,
                 friction: w.friction,
                 friction_stiffness: w.friction_stiffness,
+                augmentation_rate: w.augmentation_rate,
             },
+            mass_damping,
         )?;
         let name = match &w.name {
             Some(n) => n.clone(),
@@ -1477,6 +1594,7 @@ impl Validator<'_> {
             penalty_form,
             friction_stiffness,
             friction,
+            augmentation_rate,
         })
     }
 

@@ -19,6 +19,8 @@
 //! - [`general_contact`]: contact groups (`bodies = "all"`, lists) and self-contact: the scene
 //!   forms, the GPU tables, a pile of 16 disks and a ring pressed onto itself;
 //! - [`perturbed`]: the perturbed Lagrangian's consistent H against the node-by-node penalty;
+//! - [`augmented`]: the augmented Lagrangian leaving no penetration in a persistent contact, and
+//!   the keys it refuses;
 //! - [`contact`]: rod impact (Lagrange, penalty, rigid wall, impedance mismatch), corner-first
 //!   square on a wall, the contact plan and history columns;
 //! - [`stress`]: the stiff and extreme cases of `assets/stress/` (REFERENCES.md section 6): stiff
@@ -44,6 +46,8 @@
 #[path = "core/common.rs"]
 mod common;
 
+#[path = "core/augmented.rs"]
+mod augmented;
 #[path = "core/axisymmetric.rs"]
 mod axisymmetric;
 #[path = "core/bad_input.rs"]

@@ -156,6 +156,7 @@ impl Builder<'_> {
             friction: c.friction,
             friction_stiffness: c.friction_stiffness,
             mass_form: c.penalty_form == PenaltyForm::Mass,
+            augmentation: c.augmentation_rate,
             candidates: Vec::new(),
         };
         let spring = Spring {
@@ -249,6 +250,7 @@ impl Builder<'_> {
             friction: w.friction,
             friction_stiffness: w.friction_stiffness,
             mass_form: w.penalty_form == PenaltyForm::Mass,
+            augmentation: w.augmentation_rate,
         }
     }
 }

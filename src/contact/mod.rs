@@ -87,6 +87,9 @@ struct Pass {
     /// Penalty in the mass form (k = s m* / dt^2): outside the stable step.
     #[serde(default)]
     mass_form: bool,
+    /// Augmented Lagrangian: the multipliers' update rate (1/s; 0 for the other methods).
+    #[serde(default)]
+    augmentation: f64,
     /// Admissible candidate (position in `slaves`, segment) pairs from the last search, sorted.
     candidates: Vec<(u32, u32)>,
 }
@@ -160,6 +163,9 @@ struct Wall {
     /// Penalty in the mass form (k = s m* / dt^2): outside the stable step.
     #[serde(default)]
     mass_form: bool,
+    /// Augmented Lagrangian: the multipliers' update rate (1/s; 0 for the other methods).
+    #[serde(default)]
+    augmentation: f64,
 }
 
 fn one() -> f64 {
@@ -238,8 +244,9 @@ pub struct ContactSet {
     /// and that step's dt_n: the next step's projected Gauss-Seidel starts from them.
     warm: Vec<([u32; 2], f64)>,
     warm_dt: f64,
-    /// Penalty friction: the tangential spring force of each constraint (interface, slave node)
-    /// at the last step, sorted (Curnier-Mroz: its elastic stick carried from step to step).
+    /// The force each spring constraint (interface, slave node) carries from the last step,
+    /// sorted: penalty friction's tangential spring force (Curnier-Mroz: its elastic stick), or
+    /// the augmented Lagrangian's multiplier (which has no friction).
     #[serde(default)]
     pen_ft: Vec<([u32; 2], f64)>,
     /// Scratch: this step's, to become `pen_ft`.

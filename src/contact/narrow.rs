@@ -4,7 +4,7 @@
 //! (`collect_passes`, `collect_walls`). The free functions are pure and shared with the GPU
 //! kernel, which implements the same rules.
 
-use super::solve::{consistent_penetration, penalty_impulse};
+use super::solve::{augmented_impulse, consistent_penetration, penalty_impulse};
 use super::{dot, sub, Constraint, ContactSet, Pass};
 use crate::scene::ContactMethod;
 
@@ -196,14 +196,17 @@ impl ContactSet {
     ///
     /// Lagrange: projection at the trial positions; the node penetrates and came from the
     /// segment's front (see [`penetrates`]); key (gap before the step clamped at 0, trial gap):
-    /// the segment the node came from the front of, then the closest. Penalty: projection at
-    /// u_n, penetrating by less than half the segment; key (gap, 0).
+    /// the segment the node came from the front of, then the closest. Springs: projection at
+    /// u_n, penetrating by less than half the segment; key (gap, 0). The augmented Lagrangian's
+    /// node stays in contact while its multiplier `lambda` outweighs the spring's pull, at a gap
+    /// below lambda / k.
     fn qualify(
         &self,
         p: &Pass,
         s: u32,
         own: [f64; 2],
         j: usize,
+        lambda: f64,
     ) -> Option<((f64, f64), Projection)> {
         let [a, b] = p.segments[j];
         let (sl, al, bl) = (s as usize, a as usize, b as usize);
@@ -220,9 +223,16 @@ impl ContactSet {
                 let before = line_gap(self.x_n[sl], self.x_n[al], self.x_n[bl]);
                 penetrates(pr.gap, before, pr.length).then_some(((before.min(0.0), pr.gap), pr))
             }
-            ContactMethod::Penalty | ContactMethod::PerturbedLagrange => {
+            ContactMethod::Penalty
+            | ContactMethod::PerturbedLagrange
+            | ContactMethod::AugmentedLagrange => {
                 let pr = project(self.x_n[sl], self.x_n[al], self.x_n[bl])?;
-                (pr.gap < 0.0 && pr.gap > -0.5 * pr.length).then_some(((pr.gap, 0.0), pr))
+                let reach = if lambda > 0.0 {
+                    lambda / p.stiffness[j]
+                } else {
+                    0.0
+                };
+                (pr.gap < reach && pr.gap > -0.5 * pr.length).then_some(((pr.gap, 0.0), pr))
             }
         }
     }
@@ -249,6 +259,11 @@ impl ContactSet {
                     k += 1;
                 }
                 let range = &p.candidates[first..k];
+                let carried = if p.method == ContactMethod::AugmentedLagrange {
+                    self.carried(p.interface as u32, s)
+                } else {
+                    0.0
+                };
                 if skip.is_some_and(|d| d.binary_search(&[p.interface as u32, s]).is_ok()) {
                     continue;
                 }
@@ -256,7 +271,7 @@ impl ContactSet {
                 let mut best: Option<((f64, f64), usize, Projection)> = None;
                 for &(_, j) in range {
                     let j = j as usize;
-                    if let Some((key, pr)) = self.qualify(p, s, own, j) {
+                    if let Some((key, pr)) = self.qualify(p, s, own, j, carried) {
                         if best.is_none_or(|(bk, _, _)| key > bk) {
                             best = Some((key, j, pr));
                         }
@@ -280,7 +295,7 @@ impl ContactSet {
                     } else {
                         continue;
                     };
-                    let Some((key2, pr2)) = self.qualify(p, s, own, j2) else {
+                    let Some((key2, pr2)) = self.qualify(p, s, own, j2, carried) else {
                         continue;
                     };
                     if !ties(key, key2, pr.length) {
@@ -331,11 +346,22 @@ impl ContactSet {
                         pr.gap
                     };
                     let g_trial = g + dt * rate;
-                    let (lambda, bounded) =
-                        penalty_impulse(p.stiffness[j], g, rate, g_trial, w, dt, dt_n);
+                    let k = p.stiffness[j];
+                    let (lambda, bounded) = if p.method == ContactMethod::AugmentedLagrange {
+                        let r = p.augmentation;
+                        let Some((lambda, next, bounded)) =
+                            augmented_impulse(k, g, rate, g_trial, carried, w, dt, dt_n, r)
+                        else {
+                            continue;
+                        };
+                        springs.push(([c.interface, c.s], next));
+                        (lambda, bounded)
+                    } else {
+                        penalty_impulse(k, g, rate, g_trial, w, dt, dt_n)
+                    };
                     c.lambda = lambda;
                     self.penalty_bounded += u64::from(bounded);
-                    c.penetration = -pr.gap;
+                    c.penetration = (-pr.gap).max(0.0);
                     c.w = -w;
                     if p.friction > 0.0 {
                         let k = p.friction_stiffness * p.stiffness[j];
@@ -371,10 +397,7 @@ impl ContactSet {
             return;
         }
         let key = [c.interface, c.s];
-        let prev = self
-            .pen_ft
-            .binary_search_by_key(&key, |e| e.0)
-            .map_or(0.0, |i| self.pen_ft[i].1);
+        let prev = self.carried(c.interface, c.s);
         let vt = self.free_relative(c.s, ab, c.xi, t);
         let limit = mu * c.lambda / dt_n;
         let ft = (prev - k * dt * vt).clamp(-limit, limit);
@@ -382,6 +405,14 @@ impl ContactSet {
         c.wt = wt;
         c.lt = dt_n * ft;
         springs.push((key, ft));
+    }
+
+    /// The force constraint (interface, slave node `s`) carried from the last step (`pen_ft`; 0:
+    /// none).
+    fn carried(&self, interface: u32, s: u32) -> f64 {
+        self.pen_ft
+            .binary_search_by_key(&[interface, s], |e| e.0)
+            .map_or(0.0, |i| self.pen_ft[i].1)
     }
 
     /// The signed gap at u_n of the pass's slave `sj` (a position in `slaves`) to the closest of
@@ -498,8 +529,15 @@ impl ContactSet {
                             continue;
                         }
                     }
-                    ContactMethod::Penalty | ContactMethod::PerturbedLagrange => {
-                        if g >= 0.0 {
+                    ContactMethod::Penalty
+                    | ContactMethod::PerturbedLagrange
+                    | ContactMethod::AugmentedLagrange => {
+                        let carried = if w.method == ContactMethod::AugmentedLagrange {
+                            self.carried(w.interface as u32, l)
+                        } else {
+                            0.0
+                        };
+                        if g >= carried / w.stiffness[idx] {
                             continue;
                         }
                         let rate = dot(self.v_free[l as usize], n);
@@ -510,11 +548,22 @@ impl ContactSet {
                         } else {
                             (g, g_tr)
                         };
-                        let (lambda, bounded) =
-                            penalty_impulse(w.stiffness[idx], gs, rate, gs_tr, weight, dt, dt_n);
+                        let k = w.stiffness[idx];
+                        let (lambda, bounded) = if w.method == ContactMethod::AugmentedLagrange {
+                            let r = w.augmentation;
+                            let Some((lambda, next, bounded)) =
+                                augmented_impulse(k, gs, rate, gs_tr, carried, weight, dt, dt_n, r)
+                            else {
+                                continue;
+                            };
+                            springs.push(([c.interface, c.s], next));
+                            (lambda, bounded)
+                        } else {
+                            penalty_impulse(k, gs, rate, gs_tr, weight, dt, dt_n)
+                        };
                         c.lambda = lambda;
                         self.penalty_bounded += u64::from(bounded);
-                        c.penetration = -g;
+                        c.penetration = (-g).max(0.0);
                         c.w = -weight;
                         if w.friction > 0.0 {
                             let (k, mu) = (w.friction_stiffness * w.stiffness[idx], w.friction);

@@ -368,6 +368,44 @@ pub fn penalty_impulse(
     (spring.min(bound), bound < spring)
 }
 
+/// The augmented Lagrangian's impulse over the step, its next multiplier and whether the bound
+/// acted (Belytschko X.5.7), for a spring `k` at gap `g` (< 0 penetrates) carrying the multiplier
+/// `lambda` (a force >= 0) of the last step; `rate`, `g_trial`, `w` as for [`penalty_impulse`].
+///
+/// The contact force is lambda + k (-g) while positive (so a node stays in contact at a gap up to
+/// lambda / k); `None` otherwise: the node has left and drops its multiplier. The spring's share
+/// is bounded as in [`penalty_impulse`] when stiff for the step. The next multiplier is Uzawa's
+/// update at the rate `r` (1/s), max(0, lambda + r dt_n k (-g)): the multiplier integrates the
+/// penetration, so a persistent contact's grows until the penetration is gone and carries the
+/// whole force. That integral is stable only under mass damping alpha > r (see
+/// [`crate::scene::ContactMethod::AugmentedLagrange`]).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn augmented_impulse(
+    k: f64,
+    g: f64,
+    rate: f64,
+    g_trial: f64,
+    lambda: f64,
+    w: f64,
+    dt: f64,
+    dt_n: f64,
+    r: f64,
+) -> Option<(f64, f64, bool)> {
+    // (NaN is not a push either.)
+    let force = lambda - k * g;
+    if force.is_nan() || force <= 0.0 {
+        return None;
+    }
+    let (spring, bounded) = if g < 0.0 {
+        penalty_impulse(k, g, rate, g_trial, w, dt, dt_n)
+    } else {
+        (-dt_n * k * g, false)
+    };
+    let next = (lambda - r * dt_n * k * g).max(0.0);
+    Some((dt_n * lambda + spring, next, bounded))
+}
+
 /// The perturbed Lagrangian's penetration of a slave node (Belytschko X.5.8): the penetration
 /// `a` (> 0) of the node and, for each of its two surface segments, the segment's length and the
 /// penetration of its other end along the node's contact normal (negative: apart). With the

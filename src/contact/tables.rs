@@ -10,8 +10,10 @@ use crate::scene::ContactMethod;
 pub struct SlotTable {
     /// Interface (contact or wall) index.
     pub interface: u32,
-    /// Penalty springs (penalty or perturbed Lagrangian; else Lagrange).
+    /// Penalty springs (penalty, perturbed or augmented Lagrangian; else Lagrange).
     pub penalty: bool,
+    /// Augmented Lagrangian: the multipliers' update rate (1/s; 0: another method).
+    pub augmentation: f64,
     /// Perturbed Lagrangian: the spring acts on the consistent penetration (see
     /// [`super::solve::consistent_penetration`]).
     pub perturbed: bool,
@@ -100,6 +102,7 @@ impl ContactSet {
                     interface: p.interface as u32,
                     penalty: p.method.has_springs(),
                     perturbed: p.method == ContactMethod::PerturbedLagrange,
+                    augmentation: p.augmentation,
                     wall: false,
                     second_is_slave: !p.group && !p.slave_is_first,
                     node: s,
@@ -134,6 +137,7 @@ impl ContactSet {
                     interface: w.interface as u32,
                     penalty: w.method.has_springs(),
                     perturbed: w.method == ContactMethod::PerturbedLagrange,
+                    augmentation: w.augmentation,
                     wall: true,
                     second_is_slave: false,
                     node: l,

@@ -124,6 +124,9 @@ pub enum MetricKind {
     /// |force| of `contact` along `component` in the last history interval (N or N/m): the
     /// resultant a (near-)static run transmits.
     FinalForce,
+    /// Largest penetration of `contact` in the last history row (`max_penetration`, m): what a
+    /// (near-)static run leaves of its springs' penetration.
+    FinalPenetration,
     /// Largest nodal contact pressure between `body` and the rigid wall `contact` at the end (Pa),
     /// from the static nodal balance (see [`super::metric::contact_pressures`]).
     PeakPressure,
@@ -371,9 +374,11 @@ impl Case {
             };
             use MetricKind as K;
             match m.kind {
-                K::ContactDuration | K::PlateauForce | K::PeakForce | K::FinalForce => {
-                    need("contact", m.contact.is_some())?
-                }
+                K::ContactDuration
+                | K::PlateauForce
+                | K::PeakForce
+                | K::FinalForce
+                | K::FinalPenetration => need("contact", m.contact.is_some())?,
                 K::BodyVelocity | K::Restitution => need("body", m.body.is_some())?,
                 K::PeakPressure | K::ContactHalfWidth | K::EdgeError => {
                     need("body", m.body.is_some())?;

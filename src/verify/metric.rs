@@ -262,6 +262,11 @@ pub fn measure(m: &Metric, r: &RunData<'_>) -> std::result::Result<f64, String> 
             .contacts
             .get(contact()?)
             .map_or(0.0, |c| c.force[comp].abs()),
+        MetricKind::FinalPenetration => last
+            .0
+            .contacts
+            .get(contact()?)
+            .map_or(0.0, |c| c.max_penetration),
         MetricKind::PeakPressure | MetricKind::ContactHalfWidth | MetricKind::EdgeError => {
             let name = m.contact.as_deref().unwrap_or("");
             let wall = r

@@ -94,7 +94,7 @@ pub struct Outcome {
 
 /// The case files of `assets/verification/`, built into the binary so that `ricochet verify` runs
 /// from any folder: (file name, text), sorted by file name.
-pub const EMBEDDED: [(&str, &str); 14] = [
+pub const EMBEDDED: [(&str, &str); 15] = [
     (
         "disk_wall_10ms.toml",
         include_str!("../../assets/verification/disk_wall_10ms.toml"),
@@ -122,6 +122,10 @@ pub const EMBEDDED: [(&str, &str); 14] = [
     (
         "lame_cylinder.toml",
         include_str!("../../assets/verification/lame_cylinder.toml"),
+    ),
+    (
+        "patch_augmented.toml",
+        include_str!("../../assets/verification/patch_augmented.toml"),
     ),
     (
         "patch_test.toml",

@@ -1049,7 +1049,77 @@ fn bad_friction_names_the_key_and_value() {
             "rigid_wall[0].method",
             "\"augmented\"",
             "perturbed_lagrange",
+            "augmented_lagrange",
         ],
+    );
+}
+
+#[test]
+fn bad_augmented_lagrange_names_the_key_and_value() {
+    let wall = |damping: &str, rest: &str| {
+        with_contact(&format!(
+            "[[rigid_wall]]\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\nmethod = \"augmented_lagrange\"\n{rest}\n"
+        ))
+        .replacen(RUN, &format!("{RUN}{damping}"), 1)
+    };
+    let damped = "mass_damping = 1.0e3\n";
+    expect_accepted("wall_augmented", &wall(damped, ""), true);
+    expect_accepted(
+        "wall_augmented_rate",
+        &wall(damped, "augmentation_rate = 800.0\npenalty_scale = 0.5"),
+        false,
+    );
+    for (case, damping, rest, needles) in [
+        // Its multipliers' update needs mass damping, and a rate below it.
+        (
+            "wall_augmented_undamped",
+            "",
+            "",
+            &[
+                "rigid_wall[0].method",
+                "augmented_lagrange",
+                "run.mass_damping",
+            ][..],
+        ),
+        (
+            "wall_augmented_rate_too_high",
+            damped,
+            "augmentation_rate = 1000.0",
+            &[
+                "rigid_wall[0].augmentation_rate",
+                "1000",
+                "below run.mass_damping",
+            ][..],
+        ),
+        (
+            "wall_augmented_rate_negative",
+            damped,
+            "augmentation_rate = -5.0",
+            &["rigid_wall[0].augmentation_rate", "-5"][..],
+        ),
+        (
+            "wall_augmented_rate_nan",
+            damped,
+            "augmentation_rate = nan",
+            &["rigid_wall[0].augmentation_rate", "NaN"][..],
+        ),
+        // Normal multipliers only.
+        (
+            "wall_augmented_friction",
+            damped,
+            "friction = 0.3",
+            &["rigid_wall[0].friction", "0.3", "augmented Lagrangian"][..],
+        ),
+    ] {
+        expect_rejected(case, &wall(damping, rest), needles);
+    }
+    // The rate belongs to the augmented Lagrangian only.
+    expect_rejected(
+        "contact_rate_penalty",
+        &with_contact(
+            "[[contact]]\nbodies = [\"block\", \"other\"]\nmethod = \"penalty\"\naugmentation_rate = 10.0\n",
+        ),
+        &["contact[0].augmentation_rate", "10", "augmented_lagrange"],
     );
 }
 

@@ -33,11 +33,20 @@ struct Settled {
     energy_error: f64,
     /// Kinetic over strain energy at the end.
     kinetic_ratio: f64,
+    /// Largest penetration at the end (m).
+    penetration: f64,
+    /// Smallest step taken (s).
+    dt_min: f64,
 }
 
 /// Runs [`scene`] to its end.
 fn settle(lower: usize, upper: usize, first: &str, contact: &str) -> Settled {
-    let (scene, model, plan) = build(&scene(lower, upper, first, contact));
+    settle_scene(&scene(lower, upper, first, contact), first)
+}
+
+/// Runs the patch-test scene `text` to its end (`first` as for [`settle`]).
+fn settle_scene(text: &str, first: &str) -> Settled {
+    let (scene, model, plan) = build(text);
     // The history reports the contact force on the first body.
     let sign = if first == "upper" { 1.0 } else { -1.0 };
     assert!(plan.has(Stage::Pressure) && plan.has(Stage::MassDamping));
@@ -73,6 +82,86 @@ fn settle(lower: usize, upper: usize, first: &str, contact: &str) -> Settled {
         max_speed,
         energy_error,
         kinetic_ratio: last.kinetic.abs() / last.internal,
+        penetration: last.contacts[0].max_penetration,
+        dt_min: samples.iter().map(|s| s.dt).fold(f64::INFINITY, f64::min),
+    }
+}
+
+/// The augmented Lagrangian's defining property: the multipliers carry the pressure, so the
+/// settled blocks keep no penetration of the spring's and pass the patch test like Lagrange
+/// contact (two-pass within 1e-4 p), with the penalty's default spring (s = 2), which the penalty
+/// method would need over 100 x stiffer for the same penetration: the penalty at 100 x the
+/// stiffness still penetrates deeper, at a step over 5 x shorter. The run settings are those of
+/// the verification case `patch_augmented` (mass damping 2.4e4 /s, 30 ms: the update's rate is
+/// half the damping; see its file).
+#[test]
+fn augmented_lagrange_passes_the_patch_test_with_a_soft_spring() {
+    let s = 2.0;
+    let run = |lower: usize, upper: usize, contact: &str| {
+        let text = scene(lower, upper, "upper", contact)
+            .replace("end_time = 1.0e-2", "end_time = 3.0e-2")
+            .replace("mass_damping = 1.2e4", "mass_damping = 2.4e4");
+        settle_scene(&text, "upper")
+    };
+    for (lower, upper) in MESHES {
+        let r = run(
+            lower,
+            upper,
+            &format!("method = \"augmented_lagrange\"\ntwo_pass = true\npenalty_scale = {s}"),
+        );
+        let pen = run(
+            lower,
+            upper,
+            &format!("method = \"penalty\"\ntwo_pass = true\npenalty_scale = {s}"),
+        );
+        let stiff = run(
+            lower,
+            upper,
+            &format!(
+                "method = \"penalty\"\ntwo_pass = true\npenalty_scale = {}",
+                100.0 * s
+            ),
+        );
+        eprintln!(
+            "contact patch test, two-pass augmented Lagrange (s = {s}), {lower}/{upper}: stress \
+             error {:.2e} p, contact force {:.10} p, penetration {:.2e} m, dt {:.3e} s; penalty at \
+             s = {s}: {:.2e} m, error {:.2e} p, dt {:.3e} s; at {}: {:.2e} m, error {:.2e} p, dt \
+             {:.3e} s; kinetic/strain {:.1e}, energy error {:.1e}",
+            r.stress_error,
+            r.contact_force,
+            r.penetration,
+            r.dt_min,
+            pen.penetration,
+            pen.stress_error,
+            pen.dt_min,
+            100.0 * s,
+            stiff.penetration,
+            stiff.stress_error,
+            stiff.dt_min,
+            r.kinetic_ratio,
+            r.energy_error
+        );
+        assert!(r.kinetic_ratio < 1e-9, "not settled: {:e}", r.kinetic_ratio);
+        assert!(r.stress_error < 1e-4, "stress error {:e} p", r.stress_error);
+        assert!((r.contact_force - 1.0).abs() < 1e-4);
+        // The penalty with the same spring misses the patch test (3-4e-2 p).
+        assert!(pen.stress_error > 1e-2, "penalty {:e} p", pen.stress_error);
+        assert!(
+            r.penetration < 1e-2 * pen.penetration && r.penetration < stiff.penetration,
+            "penetration {:e} m, the penalty's {:e} m, at 100 x {:e} m",
+            r.penetration,
+            pen.penetration,
+            stiff.penetration
+        );
+        // The soft spring's step (within the variation of the element step as the blocks
+        // deform), about sqrt(100) = 10 x the stiff one's.
+        assert!(
+            (r.dt_min / pen.dt_min - 1.0).abs() < 1e-3,
+            "dt {:e} s",
+            r.dt_min
+        );
+        assert!(r.dt_min > 5.0 * stiff.dt_min, "dt {:e} s", r.dt_min);
+        assert!(r.energy_error < 1e-5, "energy error {:e}", r.energy_error);
     }
 }
 

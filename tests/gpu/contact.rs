@@ -539,3 +539,44 @@ fn gpu_perturbed_lagrange_distributes_the_penalty_by_the_consistent_h() {
         );
     }
 }
+
+/// The augmented Lagrangian's multipliers on the device (see `tests/core/augmented.rs`): the
+/// off-centre quad at rest on a wall and on a base keeps no penetration of the spring's (below
+/// 1e-2 of the penalty's, which the device reproduces), as on the CPU, and the same bits twice.
+/// (The patch test runs on both backends in the verification case `patch_augmented`.)
+#[test]
+fn gpu_augmented_lagrange_leaves_no_penetration_in_a_persistent_contact() {
+    use perturbed_scene::*;
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for (what, scene) in [
+        ("wall", quad_on_wall as fn(&str, f64) -> String),
+        ("base", quad_on_base),
+    ] {
+        let text = scene("augmented_lagrange", 0.6);
+        let al = settled_penetrations(Some(ctx.clone()), &text);
+        let again = settled_penetrations(Some(ctx.clone()), &text);
+        let cpu = settled_penetrations(None, &text);
+        let pen = settled_penetrations(Some(ctx.clone()), &scene("penalty", 0.6));
+        let pen_cpu = settled_penetrations(None, &scene("penalty", 0.6));
+        eprintln!(
+            "gpu quad on a {what}: augmented Lagrange p = {al:?} m (CPU {cpu:?}); penalty p = \
+             {pen:?} m (CPU {pen_cpu:?})"
+        );
+        assert_eq!(
+            al.map(f64::to_bits),
+            again.map(f64::to_bits),
+            "{what}: same bits"
+        );
+        for i in 0..2 {
+            assert!(
+                (pen[i] / pen_cpu[i] - 1.0).abs() < 1e-4,
+                "{what}: penalty {pen:?} against the CPU {pen_cpu:?}"
+            );
+            assert!(
+                al[i].abs() < 1e-2 * pen[i] && cpu[i].abs() < 1e-2 * pen[i],
+                "{what}: penetration {al:?} m (CPU {cpu:?}) against the penalty's {pen:?} m"
+            );
+        }
+    }
+}

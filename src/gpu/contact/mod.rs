@@ -165,7 +165,8 @@ pub struct GpuSlot {
     /// none), whose candidate segments give their gaps.
     pub ps: u32,
     pub ns: u32,
-    pub _pad: u32,
+    /// Augmented Lagrangian: the multipliers' update rate (1/s; 0: another method).
+    pub ar: f32,
 }
 
 /// Mirror of WGSL `Segment`.
@@ -486,7 +487,7 @@ impl ContactState {
                 kt: s.friction_stiffness as f32,
                 ps: s.neighbour_slots[0],
                 ns: s.neighbour_slots[1],
-                _pad: 0,
+                ar: s.augmentation as f32,
             })
             .collect();
         let segs: Vec<GpuSegment> = t
