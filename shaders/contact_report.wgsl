@@ -55,7 +55,12 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocati
             work = vec4<f32>(0.5 * dot(j, vl.zw + vn), 0.5 * dot(j, vn), 0.0, 0.0);
             var s = nodes[g];
             if (moving) {
-                s = vec4<f32>(s.xy + dt * d, vn);
+                // (The displacement's compensated sum of node.wgsl.)
+                let ru = 2u * cc.p.n_nodes + g;
+                let yu = dt * d + v_prev[ru];
+                let un = s.xy + yu;
+                v_prev[ru] = yu - (un - s.xy * cc.p.one);
+                s = vec4<f32>(un, vn);
             } else {
                 s = vec4<f32>(s.xy, vn);
             }

@@ -434,10 +434,11 @@ impl GpuState {
                 storage | U::COPY_SRC | U::COPY_DST,
             )
         });
-        // v^{n-1/2} per node, then the f32 rounding residual of each node's last velocity update
-        // (node.wgsl's compensated sum, joined by the contact's corrections), carried to the next
-        // step (and in the checkpoint like every allocated buffer).
-        let v_prev = a.zeroed("v_prev", 16 * nn as u64, storage | U::COPY_SRC);
+        // v^{n-1/2} per node, then the f32 rounding residuals of each node's last velocity update
+        // and of its last displacement update (node.wgsl's compensated sums, joined by the
+        // contact's corrections), carried to the next step (and in the checkpoint like every
+        // allocated buffer).
+        let v_prev = a.zeroed("v_prev", 24 * nn as u64, storage | U::COPY_SRC);
         let u_snap =
             has_fields.then(|| a.zeroed("u_snapshot", 8 * nn as u64, storage | U::COPY_SRC));
         let cons: Vec<GpuConstraint> = model

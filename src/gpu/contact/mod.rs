@@ -108,8 +108,9 @@ pub struct ContactParams {
     pub f_rf: u32,
     /// 1.0, read at run time (the report's compensated work sums; see `Params::one`).
     pub one: f32,
-    /// Nodes of the model: `v_prev`'s second half (from this index) holds node.wgsl's velocity
-    /// residuals, which the contact's corrections join.
+    /// Nodes of the model: `v_prev`'s second third (from this index) holds node.wgsl's velocity
+    /// residuals, its last third (from twice this index) the displacement residuals, which the
+    /// contact's corrections join.
     pub n_nodes: u32,
     pub f_box: u32,
     pub f_usearch: u32,
