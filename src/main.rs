@@ -950,9 +950,9 @@ fn check(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
             .collect();
         if !rates.is_empty() {
             println!(
-                "  augment  multipliers updated at (run.mass_damping = {} /s): {}",
-                scene.run.mass_damping,
-                rates.join(", ")
+                "  augment  {} (the multipliers' update rate, below run.mass_damping = {} /s)",
+                rates.join(", "),
+                scene.run.mass_damping
             );
         }
         match c.penalty_step() {
