@@ -59,6 +59,32 @@ fn augmented_impulse(k: f32, g: f32, rate: f32, g_trial: f32, lambda: f32, w: f3
     return vec4<f32>(dtn * lambda + spring.x, next, spring.y, 1.0);
 }
 
+// A spring method's constraint `c0` (its w set) for stiffness k at the gap g (the perturbed
+// Lagrangian's consistent one) and trial gap g_trial: the penalty's impulse, or the augmented
+// Lagrangian's with the multiplier `carried` of the last step and its next multiplier in `ft`
+// (no constraint where the node has left); the penetration `pen` (m), the stiffness in `wt`.
+fn spring(c0: Cons, sl: Slot, k: f32, g: f32, rate: f32, g_trial: f32, carried: f32, dt: f32, dtn: f32,
+          pen: f32) -> Cons {
+    var c = c0;
+    if (sl.ar > 0.0) {
+        let a = augmented_impulse(k, g, rate, g_trial, carried, c.w, dt, dtn, sl.ar);
+        if (a.w == 0.0) {
+            return no_constraint();
+        }
+        c.lambda = a.x;
+        c.ft = a.y;
+        c.dt_warm = -a.z;
+    } else {
+        let imp = penalty_impulse(k, g, rate, g_trial, c.w, dt, dtn);
+        c.lambda = imp.x;
+        c.dt_warm = -imp.y;
+    }
+    c.pen = max(pen, 0.0);
+    c.kind = KIND_PENALTY;
+    c.wt = k;
+    return c;
+}
+
 // The perturbed Lagrangian's penetration of a slave node (crate::contact::consistent_penetration):
 // its penetration a (> 0) and, per surface segment, (length, the other end's penetration along
 // the node's normal); the N_I-weighted mean of the linear penetration over the contact support.
@@ -386,23 +412,7 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32
         if ((sl.info & SLOT_PERTURBED) != 0u) {
             g = consistent_pass_gap(sl, best_gap);
         }
-        let g_trial = g + dt * rate;
-        if (sl.ar > 0.0) {
-            let a = augmented_impulse(sg.k, g, rate, g_trial, carried, w, dt, dtn, sl.ar);
-            if (a.w == 0.0) {
-                return no_constraint();
-            }
-            c.lambda = a.x;
-            c.ft = a.y;
-            c.dt_warm = -a.z;
-        } else {
-            let imp = penalty_impulse(sg.k, g, rate, g_trial, w, dt, dtn);
-            c.lambda = imp.x;
-            c.dt_warm = -imp.y;
-        }
-        c.pen = max(-best_gap, 0.0);
-        c.kind = KIND_PENALTY;
-        c.wt = sg.k;
+        c = spring(c, sl, sg.k, g, rate, g + dt * rate, carried, dt, dtn, -best_gap);
     }
     return c;
 }
@@ -435,22 +445,7 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32) -> Con
             gs = consistent_gap(sl, n, g);
             gs_tr = gs + dt * rate;
         }
-        if (sl.ar > 0.0) {
-            let a = augmented_impulse(sl.k, gs, rate, gs_tr, carried, w, dt, dtn, sl.ar);
-            if (a.w == 0.0) {
-                return no_constraint();
-            }
-            c.lambda = a.x;
-            c.ft = a.y;
-            c.dt_warm = -a.z;
-        } else {
-            let imp = penalty_impulse(sl.k, gs, rate, gs_tr, w, dt, dtn);
-            c.lambda = imp.x;
-            c.dt_warm = -imp.y;
-        }
-        c.pen = max(-g, 0.0);
-        c.kind = KIND_PENALTY;
-        c.wt = sl.k;
+        c = spring(c, sl, sl.k, gs, rate, gs_tr, carried, dt, dtn, -g);
     }
     return c;
 }

@@ -345,19 +345,13 @@ impl ContactSet {
                     } else {
                         pr.gap
                     };
-                    let g_trial = g + dt * rate;
-                    let k = p.stiffness[j];
-                    let (lambda, bounded) = if p.method == ContactMethod::AugmentedLagrange {
-                        let r = p.augmentation;
-                        let Some((lambda, next, bounded)) =
-                            augmented_impulse(k, g, rate, g_trial, carried, w, dt, dt_n, r)
-                        else {
-                            continue;
-                        };
-                        springs.push(([c.interface, c.s], next));
-                        (lambda, bounded)
-                    } else {
-                        penalty_impulse(k, g, rate, g_trial, w, dt, dt_n)
+                    let (k, r) = (p.stiffness[j], p.augmentation);
+                    let Some((lambda, bounded)) = spring_impulse(
+                        [k, g, rate, g + dt * rate, carried, w, dt, dt_n, r],
+                        [c.interface, c.s],
+                        &mut springs,
+                    ) else {
+                        continue;
                     };
                     c.lambda = lambda;
                     self.penalty_bounded += u64::from(bounded);
@@ -548,18 +542,13 @@ impl ContactSet {
                         } else {
                             (g, g_tr)
                         };
-                        let k = w.stiffness[idx];
-                        let (lambda, bounded) = if w.method == ContactMethod::AugmentedLagrange {
-                            let r = w.augmentation;
-                            let Some((lambda, next, bounded)) =
-                                augmented_impulse(k, gs, rate, gs_tr, carried, weight, dt, dt_n, r)
-                            else {
-                                continue;
-                            };
-                            springs.push(([c.interface, c.s], next));
-                            (lambda, bounded)
-                        } else {
-                            penalty_impulse(k, gs, rate, gs_tr, weight, dt, dt_n)
+                        let (k, r) = (w.stiffness[idx], w.augmentation);
+                        let Some((lambda, bounded)) = spring_impulse(
+                            [k, gs, rate, gs_tr, carried, weight, dt, dt_n, r],
+                            [c.interface, c.s],
+                            &mut springs,
+                        ) else {
+                            continue;
                         };
                         c.lambda = lambda;
                         self.penalty_bounded += u64::from(bounded);
@@ -575,6 +564,26 @@ impl ContactSet {
             }
         }
         self.pen_ft_next = springs;
+    }
+}
+
+/// A spring method's impulse over the step and whether its bound acted, from
+/// `[k, g, rate, g_trial, carried, w, dt, dt_n, r]`: the penalty's ([`penalty_impulse`]; the
+/// perturbed Lagrangian's with its consistent g), or with an augmentation rate r > 0 the augmented
+/// Lagrangian's ([`augmented_impulse`]) with the multiplier `carried` of the last step, its next
+/// multiplier pushed to `springs` under `key`; `None` where that node has left the contact.
+fn spring_impulse(
+    [k, g, rate, g_trial, carried, w, dt, dt_n, r]: [f64; 9],
+    key: [u32; 2],
+    springs: &mut Vec<([u32; 2], f64)>,
+) -> Option<(f64, bool)> {
+    if r > 0.0 {
+        let (lambda, next, bounded) =
+            augmented_impulse(k, g, rate, g_trial, carried, w, dt, dt_n, r)?;
+        springs.push((key, next));
+        Some((lambda, bounded))
+    } else {
+        Some(penalty_impulse(k, g, rate, g_trial, w, dt, dt_n))
     }
 }
 
