@@ -46,6 +46,9 @@ override WG: u32 = 64u;
 @group(0) @binding(5) var<storage, read_write> elem_dt: array<f32>;
 @group(0) @binding(6) var<storage, read_write> ctrl: Control;
 @group(0) @binding(7) var<storage, read_write> sample_src: array<vec4<f32>>;
+// v^{n-1/2}, the velocity residuals, then the displacement residuals (node.wgsl): each node's
+// displacement is u + its residual (v_prev[2 n_nodes + i]) to about eps_f32^2 u.
+@group(0) @binding(10) var<storage, read> v_prev: array<vec2<f32>>;
 //#if dissipation
 // (Q_x, Q_y, hourglass work, bulk work), (bulk P xx xy yx yy) per element, and with the
 // axisymmetric variant (bulk P_33, 0, 0, 0)
@@ -247,6 +250,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s2 = nodes[el.nodes.z];
     let s3 = nodes[el.nodes.w];
     let u = array<vec2<f32>, 4>(s0.xy, s1.xy, s2.xy, s3.xy);
+    let ur = 2u * params.n_nodes;
+    let ulo = array<vec2<f32>, 4>(v_prev[ur + el.nodes.x], v_prev[ur + el.nodes.y], v_prev[ur + el.nodes.z],
+                                  v_prev[ur + el.nodes.w]);
     let v = array<vec2<f32>, 4>(s0.zw, s1.zw, s2.zw, s3.zw);
     let tri = el.nodes.z == el.nodes.w;
     // Corner weights at the centre: 1/4 each, or 1/3 on a triangle's three corners.
@@ -280,13 +286,18 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // Displacement gradient H = F - I and its rate, from the corners' displacements and
     // velocities relative to corner 0 (the same in exact arithmetic, since sum_a b_a = 0): in f32
     // a rigid translation then gives no strain at all, where the absolute u (a body slid by many
-    // element sizes) would leave eps_f32 u / h of it, random per element and step.
+    // element sizes) would leave eps_f32 u / h of it, random per element and step. Each corner's
+    // u carries its own rounding (node.wgsl's compensated update), up to half an ulp of u apart
+    // between corners: that much strain noise (as large as the strain of a block resting under
+    // gravity once it has slid a few mm) drove the elements like a random load, so the difference
+    // adds the corners' residuals (the low parts of their displacements).
     var h = vec4<f32>(0.0);   // xx xy yx yy
     var fd = vec4<f32>(0.0);
+    var du: array<vec2<f32>, 4>;
     for (var a = 1; a < 4; a++) {
-        let du = u[a] - u[0];
+        du[a] = (u[a] - u[0]) + (ulo[a] - ulo[0]);
         let dw = v[a] - v[0];
-        h += vec4<f32>(du.x * bx[a], du.x * by[a], du.y * bx[a], du.y * by[a]);
+        h += vec4<f32>(du[a].x * bx[a], du[a].x * by[a], du[a].y * bx[a], du[a].y * by[a]);
         fd += vec4<f32>(dw.x * bx[a], dw.x * by[a], dw.y * bx[a], dw.y * by[a]);
     }
     let f = h + vec4<f32>(1.0, 0.0, 0.0, 1.0);
@@ -425,7 +436,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let k = b.hourglass_coefficient * 2.0 * b.mu * a0t * bb / gg;
         var q = vec2<f32>(0.0);
         for (var a = 1; a < 4; a++) {
-            q += gamma[a] * (u[a] - u[0]);
+            q += gamma[a] * du[a];
         }
         for (var a = 0; a < 4; a++) {
             force[a] -= k * gamma[a] * q;

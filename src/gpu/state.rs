@@ -538,6 +538,7 @@ impl GpuState {
             (5, &elem_dt),
             (6, &ctrl),
             (7, &sample_src),
+            (10, &v_prev),
         ];
         if let Some(s) = &elem_state {
             el.push((8, s));
