@@ -47,7 +47,8 @@ override WG: u32 = 64u;
 @group(0) @binding(6) var<storage, read_write> ctrl: Control;
 @group(0) @binding(7) var<storage, read_write> sample_src: array<vec4<f32>>;
 // v^{n-1/2}, the velocity residuals, then the displacement residuals (node.wgsl): each node's
-// displacement is u + its residual (v_prev[2 n_nodes + i]) to about eps_f32^2 u.
+// velocity is v + its residual (v_prev[n_nodes + i]) and its displacement u + its residual
+// (v_prev[2 n_nodes + i]), to about eps_f32^2 of them.
 @group(0) @binding(10) var<storage, read> v_prev: array<vec2<f32>>;
 //#if dissipation
 // (Q_x, Q_y, hourglass work, bulk work), (bulk P xx xy yx yy) per element, and with the
@@ -251,6 +252,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s3 = nodes[el.nodes.w];
     let u = array<vec2<f32>, 4>(s0.xy, s1.xy, s2.xy, s3.xy);
     let ur = 2u * params.n_nodes;
+    let vr = params.n_nodes;
+    let vlo = array<vec2<f32>, 4>(v_prev[vr + el.nodes.x], v_prev[vr + el.nodes.y], v_prev[vr + el.nodes.z],
+                                  v_prev[vr + el.nodes.w]);
     let ulo = array<vec2<f32>, 4>(v_prev[ur + el.nodes.x], v_prev[ur + el.nodes.y], v_prev[ur + el.nodes.z],
                                   v_prev[ur + el.nodes.w]);
     let v = array<vec2<f32>, 4>(s0.zw, s1.zw, s2.zw, s3.zw);
@@ -290,13 +294,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // u carries its own rounding (node.wgsl's compensated update), up to half an ulp of u apart
     // between corners: that much strain noise (as large as the strain of a block resting under
     // gravity once it has slid a few mm) drove the elements like a random load, so the difference
-    // adds the corners' residuals (the low parts of their displacements).
+    // adds the corners' residuals (the low parts of their displacements), and the same for the
+    // velocities (a body sliding at 1 m/s: half an ulp is 6e-8 m/s).
     var h = vec4<f32>(0.0);   // xx xy yx yy
     var fd = vec4<f32>(0.0);
     var du: array<vec2<f32>, 4>;
     for (var a = 1; a < 4; a++) {
         du[a] = (u[a] - u[0]) + (ulo[a] - ulo[0]);
-        let dw = v[a] - v[0];
+        let dw = (v[a] - v[0]) + (vlo[a] - vlo[0]);
         h += vec4<f32>(du[a].x * bx[a], du[a].x * by[a], du[a].y * bx[a], du[a].y * by[a]);
         fd += vec4<f32>(dw.x * bx[a], dw.x * by[a], dw.y * bx[a], dw.y * by[a]);
     }
