@@ -3,8 +3,6 @@
 //! left (the quad of `tests/shared/perturbed_scene.rs` at rest on a wall and on a base), and the
 //! scene keys it refuses. The patch test is in `patch_contact.rs`.
 
-use ricochet::run::schedule;
-
 use crate::common::*;
 
 use crate::perturbed::perturbed_scene::*;
@@ -22,12 +20,7 @@ struct Rest {
 }
 
 fn settle(text: &str, method: &str) -> Rest {
-    let (scene, model, plan) = build(text);
-    let mut run = Stepper::new(model.clone(), plan, schedule(&scene));
-    while run.advance() {}
-    if let Some(f) = &run.failure {
-        panic!("{method}: the run failed: {}", f.message);
-    }
+    let (model, run) = Stepper::finish(text, method);
     let last = run.samples.last().expect("samples");
     let weight: f64 = model.mass[..4].iter().map(|m| m * G).sum();
     let mut audit = ricochet::output::history::EnergyAudit::default();

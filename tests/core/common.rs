@@ -146,6 +146,18 @@ impl Stepper {
         }
         !(self.done || self.failure.is_some())
     }
+
+    /// Builds the scene `text` and runs it to its end on the CPU; panics naming `what` if the
+    /// run fails. Returns the model and the finished stepper.
+    pub fn finish(text: &str, what: &str) -> (Model, Stepper) {
+        let (scene, model, plan) = build(text);
+        let mut run = Stepper::new(model.clone(), plan, ricochet::run::schedule(&scene));
+        while run.advance() {}
+        if let Some(f) = &run.failure {
+            panic!("{what}: the run failed: {}", f.message);
+        }
+        (model, run)
+    }
 }
 
 /// Reads a CSV file of numbers with a header line.

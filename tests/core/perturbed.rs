@@ -1,8 +1,6 @@
 //! The perturbed Lagrangian (Belytschko X.5.8) on the CPU reference: its defining property, the
 //! consistent H distributing the penalty along the surface (see `tests/shared/perturbed_scene.rs`).
 
-use ricochet::run::schedule;
-
 use crate::common::*;
 
 #[path = "../shared/perturbed_scene.rs"]
@@ -12,12 +10,7 @@ use perturbed_scene::*;
 /// Runs the scene `text` (a quad with `method`) to rest: (penetrations of the base nodes, reactions from
 /// statics, kinetic over strain energy at the end).
 fn settle(text: &str, method: &str) -> ([f64; 2], [f64; 2], f64) {
-    let (scene, model, plan) = build(text);
-    let mut run = Stepper::new(model.clone(), plan, schedule(&scene));
-    while run.advance() {}
-    if let Some(f) = &run.failure {
-        panic!("{method}: the run failed: {}", f.message);
-    }
+    let (model, run) = Stepper::finish(text, method);
     let last = run.samples.last().expect("samples");
     (
         penetrations(&model.position, run.solver.displacement()),
