@@ -71,7 +71,17 @@ struct ContactParams {
     f_usearch: u32,       // u at the last search per local node (xy)
     f_rp: u32,            // report partials per slot chunk start
     f_wp: u32,            // work partials per node chunk
+    // The active slots (a pass slot with candidates, a wall slot near its wall: the only ones
+    // that can have a constraint until the next search), built at each search: a flag per slot,
+    // their exclusive prefix (n_slots + 1 words, the last the count), the list in slot order.
+    o_aflag: u32,
+    o_aoff: u32,
+    o_alist: u32,
+    _pad: u32,
 }
+
+// Indirect entry of the kernels over the active slots (src/gpu/contact/mod.rs ACTIVE_ENTRY).
+const ACTIVE_ENTRY: u32 = 78u;        // 14 + MAX_COLORS
 
 const MAX_COLORS: u32 = 64u;
 

@@ -459,14 +459,24 @@ fn narrow_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32, carried: f32) -> Cons 
     return with_friction(narrow_pass(k, sl, dt, dtn, inv_scale, carried), sl, inv_scale);
 }
 
-// The narrow phase of every slot, with the warm start (as on the CPU): a Lagrange constraint of a
-// slot that carried lambda last step starts from it, scaled by the ratio of the steps.
+// The active slots of the last search (the others have no constraint, cleared at the search).
+fn active_count() -> u32 {
+    return ws[cc.p.o_aoff + cc.p.n_slots];
+}
+
+fn active_slot(j: u32) -> u32 {
+    return ws[cc.p.o_alist + j];
+}
+
+// The narrow phase of every active slot, with the warm start (as on the CPU): a Lagrange
+// constraint of a slot that carried lambda last step starts from it, scaled by the ratio of the
+// steps. Dispatched over the active slots (indirect entry ACTIVE_ENTRY).
 @compute @workgroup_size(CG)
 fn narrow(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
-    if (!contact_running() || k >= cc.p.n_slots) {
+    if (!contact_running() || gid.x >= active_count()) {
         return;
     }
+    let k = active_slot(gid.x);
     let dt = ctrl.dt_next;
     let dtn = ctrl.dt_node;
     let old = cons[k];

@@ -137,19 +137,36 @@ fn slot_friction(k: u32) -> vec4<f32> {
     return vec4<f32>(c.lt, before + after, after, 0.0);
 }
 
-// 5a. Per chunk of CG slots, one partial per run of slots of one interface, at the run's first
-//     slot: fws[f_rp + k] = (impulse, active, largest penetration), summed in slot order; with
-//     friction also fws[f_rf + k] = the sums of slot_friction.
+// The active slots of the last search (contact_narrow.wgsl): only they can have a constraint.
+fn active_count() -> u32 {
+    return ws[cc.p.o_aoff + cc.p.n_slots];
+}
+
+fn active_slot(j: u32) -> u32 {
+    return ws[cc.p.o_alist + j];
+}
+
+// Where interface f's active slots begin in the active list (f = n_ifaces: the count).
+fn active_begin(f: u32) -> u32 {
+    return ws[cc.p.o_aoff + ws[cc.p.o_iface + f]];
+}
+
+// 5a. Per chunk of CG active slots (in slot order), one partial per run of slots of one
+//     interface, at the run's first position j in the active list: fws[f_rp + j] = (impulse,
+//     active, largest penetration), summed in slot order; with friction also fws[f_rf + j] = the
+//     sums of slot_friction. Dispatched over the active slots (indirect entry ACTIVE_ENTRY).
 @compute @workgroup_size(CG)
 fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
-    let k = gid.x;
+    let j = gid.x;
     let l = lid.x;
     if (!running_uniform(l)) {
         return;
     }
     let dt = ctrl.dt_next;
     let friction = cc.p.friction != 0u;
-    if (k < cc.p.n_slots) {
+    let na = active_count();
+    if (j < na) {
+        let k = active_slot(j);
         sh_f[l] = slot_report(k, dt);
         let c = cons[k];
         if (c.kind == KIND_PENALTY && c.dt_warm < 0.0) {
@@ -163,13 +180,13 @@ fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
     if (l != 0u) {
         return;
     }
-    let n = min(CG, cc.p.n_slots - min(k, cc.p.n_slots));
-    var start = k;
+    let n = min(CG, na - min(j, na));
+    var start = j;
     var acc = vec4<f32>(0.0);
     var accf = vec4<f32>(0.0);
     var f = NONE;
     for (var q = 0u; q < n; q++) {
-        let fq = interface_of(k + q);
+        let fq = interface_of(active_slot(j + q));
         if (fq != f) {
             if (f != NONE) {
                 fws[cc.p.f_rp + start] = acc;
@@ -178,7 +195,7 @@ fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
                 }
             }
             f = fq;
-            start = k + q;
+            start = j + q;
             acc = vec4<f32>(0.0);
             accf = vec4<f32>(0.0);
         }
@@ -209,8 +226,8 @@ fn acc_set(f: u32, a: vec4<f32>) {
     c_hist[b + 3u] = a.w;
 }
 
-// 5b. Per interface (its slots are contiguous: ws[o_iface + f] .. ws[o_iface + f + 1]), the
-//     partials of its runs, lane l taking runs l, l + CG, ... in order, then the tree (sums, and
+// 5b. Per interface (its slots are contiguous, and so are its active ones: active_begin(f) ..
+//     active_begin(f + 1) in the active list), the partials of its runs, lane l taking runs l, l + CG, ... in order, then the tree (sums, and
 //     the largest penetration); the history row on sample steps; the work (the finish partials
 //     the same way); sweep counts. The whole workgroup works on each interface in turn, so that
 //     an interface of many slots costs its slots / CG^2 loads per lane, not its slots / CG.
@@ -231,8 +248,8 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     // With friction: the friction work of the step over all interfaces (lane 0), in order.
     var fwork = vec2<f32>(0.0);
     for (var f = 0u; f < ni; f++) {
-        let lo = ws[cc.p.o_iface + f];
-        let hi = ws[cc.p.o_iface + f + 1u];
+        let lo = active_begin(f);
+        let hi = active_begin(f + 1u);
         var r = vec4<f32>(0.0);
         var rf = vec4<f32>(0.0);
         if (hi > lo) {

@@ -70,8 +70,8 @@ fn set_ind(k: u32, n: u32) {
     ind[3u * k + 2u] = 1u;
 }
 
-// Indirect sizes of the search kernels: their sizes when a search is due, else zero. Per-step
-// counters reset here.
+// Indirect sizes of the search kernels: their sizes when a search is due, else zero; and of the
+// kernels over the active slots. Per-step counters reset here.
 @compute @workgroup_size(1)
 fn plan() {
     if (!contact_running()) {
@@ -93,6 +93,13 @@ fn plan() {
     set_ind(11u, f * groups(cc.p.n_slots));
     set_ind(12u, f * groups(cc.p.n_slots));
     set_ind(13u, f * groups(cc.p.n_slots));
+    // The kernels over the active slots: every slot's group when this step searches (they
+    // return beyond the count the search finds), else the last search's count.
+    if (due) {
+        set_ind(ACTIVE_ENTRY, groups(cc.p.n_slots));
+    } else {
+        set_ind(ACTIVE_ENTRY, groups(wsl(cc.p.o_aoff + cc.p.n_slots)));
+    }
     atomicStore(&cc.searching, f);
     if (due) {
         cc.searches += 1u;
@@ -344,17 +351,46 @@ fn visit(k: u32, mode: u32, at: u32) -> u32 {
     return n;
 }
 
-// 2d. Candidates per slot.
+// Whether wall slot `sl` may touch its wall before the next search: its node within the margin
+// of the wall at u of this search. Until the next one the node moves less than half the margin,
+// so a node farther away stays at least half the margin off the wall (the same bound as the
+// segments' inflated boxes). An augmented Lagrangian slot, which may carry a multiplier beyond
+// the contact, is always active; so is every slot without a margin.
+fn wall_near(sl: Slot) -> bool {
+    if (sl.ar > 0.0 || !(cc.p.margin > 0.0)) {
+        return true;
+    }
+    let x = c_ref[sl.s].xy - sl.point;
+    let g = min(dot(x + pos(sl.s).xy, sl.normal), dot(x + pos(sl.s).zw, sl.normal));
+    return g < cc.p.margin;
+}
+
+// 2d. Candidates per slot, and whether the slot is active until the next search (see
+// ContactParams.o_aflag); an inactive slot's constraint is cleared (it can have none).
 @compute @workgroup_size(CG)
 fn slot_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
     if (!contact_running() || k >= cc.p.n_slots) {
         return;
     }
-    wss(cc.p.o_ccount + k, visit(k, 0u, 0u));
+    let n = visit(k, 0u, 0u);
+    wss(cc.p.o_ccount + k, n);
+    let sl = slots[k];
+    var on = n > 0u;
+    if ((sl.info & SLOT_WALL) != 0u) {
+        on = wall_near(sl);
+    }
+    wss(cc.p.o_aflag + k, select(0u, 1u, on));
+    if (!on) {
+        var c: Cons;
+        c.kind = KIND_NONE;
+        c.a = NONE;
+        c.b = NONE;
+        cons[k] = c;
+    }
 }
 
-// 2e. Candidate offsets; a search that does not fit stops the step for the host to grow the buffer.
+// 2e. Candidate offsets and the active slots' offsets; a search that does not fit stops the step for the host to grow the buffer.
 @compute @workgroup_size(RG)
 fn scan_slots(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
@@ -362,6 +398,7 @@ fn scan_slots(@builtin(local_invocation_id) lid: vec3<u32>) {
         return;
     }
     let total = scan(cc.p.o_ccount, cc.p.o_coff, NONE, cc.p.n_slots, l);
+    scan(cc.p.o_aflag, cc.p.o_aoff, NONE, cc.p.n_slots, l);
     if (l == 0u) {
         atomicStore(&cc.n_cand, total);
         // The node adjacency: each slot's slave and its candidates' nodes.
@@ -373,7 +410,7 @@ fn scan_slots(@builtin(local_invocation_id) lid: vec3<u32>) {
     }
 }
 
-// 2f. The candidates, sorted per slot.
+// 2f. The candidates, sorted per slot; the list of active slots.
 @compute @workgroup_size(CG)
 fn slot_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
@@ -381,6 +418,9 @@ fn slot_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     visit(k, 1u, wsl(cc.p.o_coff + k));
+    if (wsl(cc.p.o_aflag + k) != 0u) {
+        wss(cc.p.o_alist + wsl(cc.p.o_aoff + k), k);
+    }
 }
 
 // The nodes a slot can touch: its slave, then its candidates' nodes (a node may repeat).

@@ -73,15 +73,15 @@ fn clear_mask(i: u32) {
 // (sh_off: offsets): sequential in invocation 0, so the same on every run. A constraint that
 // finds all 32 colours taken goes to the serial colour, which invocation 0 sweeps alone.
 fn compact(l: u32) {
-    // The Lagrange slots in slot order into ws[o_color..]: each invocation a contiguous chunk,
-    // offsets by a prefix over the invocations.
-    let n = cc.p.n_slots;
+    // The Lagrange slots in slot order into ws[o_color..]: each invocation a contiguous chunk
+    // of the active slots, offsets by a prefix over the invocations.
+    let n = active_count();
     let chunk = (n + RG - 1u) / RG;
     let begin = min(l * chunk, n);
     let end = min(begin + chunk, n);
     var mine = 0u;
-    for (var k = begin; k < end; k++) {
-        if (cons[k].kind == KIND_LAGRANGE) {
+    for (var j = begin; j < end; j++) {
+        if (cons[active_slot(j)].kind == KIND_LAGRANGE) {
             mine += 1u;
         }
     }
@@ -98,7 +98,8 @@ fn compact(l: u32) {
     }
     workgroupBarrier();
     var at = sh_pre[l];
-    for (var k = begin; k < end; k++) {
+    for (var j = begin; j < end; j++) {
+        let k = active_slot(j);
         if (cons[k].kind == KIND_LAGRANGE) {
             ws[cc.p.o_color + at] = k;
             at += 1u;
@@ -236,8 +237,9 @@ fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     var taken = sweeps_one(l, dt, inv_scale);
     for (var round = 0u; round < ACTIVE_SET_ROUNDS; round++) {
         var added = 0.0;
-        for (var k = l; k < cc.p.n_slots; k += RG) {
-            if (recheck_slot(k, dt, dtn, inv_scale)) {
+        let na = active_count();
+        for (var j = l; j < na; j += RG) {
+            if (recheck_slot(active_slot(j), dt, dtn, inv_scale)) {
                 added = 1.0;
             }
         }

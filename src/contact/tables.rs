@@ -202,4 +202,30 @@ impl ContactSet {
         out.sort_unstable();
         out
     }
+
+    /// The wall slots, in [`Tables`] numbering (after every pass's slaves), of the constraints of
+    /// the last [`ContactSet::apply`] that carry an impulse: the wall contacts, against which a
+    /// device search's active slots are checked in tests.
+    pub fn active_wall_slots(&self) -> Vec<u32> {
+        let mut base = self
+            .passes
+            .iter()
+            .map(|p| p.slaves.len() as u32)
+            .sum::<u32>();
+        let mut out = Vec::new();
+        for w in &self.walls {
+            for c in &self.cons {
+                if c.a != u32::MAX || c.lambda <= 0.0 || c.interface != w.interface as u32 {
+                    continue;
+                }
+                if let Some(i) = w.nodes.iter().position(|&l| l == c.s) {
+                    out.push(base + i as u32);
+                }
+            }
+            base += w.nodes.len() as u32;
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
 }

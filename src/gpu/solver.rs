@@ -853,6 +853,33 @@ impl GpuSolver {
             .collect())
     }
 
+    /// Test hook: the active slots of the last device search (those that can have a constraint
+    /// until the next: a pass slot with candidates, a wall slot near its wall), in slot order
+    /// ([`crate::contact::Tables`] numbering), read back from the device (one extra readback).
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the scene has no contact or the device is lost.
+    pub fn contact_active_slots(&mut self) -> Result<Vec<u32>> {
+        let Some(c) = self.state.contact.as_ref() else {
+            return Err(Error::Gpu("the scene has no contact".into()));
+        };
+        let p = c.params;
+        let Some(ws) = c.binding(13).cloned() else {
+            return Err(Error::Gpu("contact buffers missing".into()));
+        };
+        let n = p.n_slots as u64;
+        let bytes = self.read_copies(
+            "active_readback",
+            &[
+                (&ws, 4 * (p.o_aoff as u64 + n), 4),
+                (&ws, 4 * p.o_alist as u64, 4 * n.max(1)),
+            ],
+        )?;
+        let w: &[u32] = bytemuck::cast_slice(&bytes);
+        let count = (w[0] as usize).min(n as usize);
+        Ok(w[1..1 + count].to_vec())
+    }
+
     /// Kernel test hook: uploads displacements `u` and half-step velocities `v`, runs the element
     /// stage once, and returns each element's nodal forces and stable step.
     ///

@@ -238,7 +238,9 @@ fn gpu_per_colour_solve_matches_the_one_workgroup_solve_and_the_cpu() {
 }
 
 /// Every (slot, segment) pair that parry's broad phase yields and the CPU narrow phase activates
-/// at the GPU's current positions is among the candidates of the GPU's last search.
+/// at the GPU's current positions is among the candidates of the GPU's last search, and its slot,
+/// like every wall slot the CPU activates, among the search's active slots (the only ones the
+/// narrow phase, the solve and the reports visit).
 #[test]
 fn gpu_search_candidates_contain_every_pair_parry_and_the_narrow_phase_activate() {
     let Some(ctx) = context() else { return };
@@ -320,11 +322,19 @@ bodies = "all"
         let mut set = ricochet::contact::ContactSet::new(&model).expect("contact");
         let mut checked = 0usize;
         let mut pairs = 0usize;
+        let mut walls = 0usize;
+        let mut inactive_walls = 0usize;
+        let tables = set.tables();
         for _ in 0..6 {
             if gpu.run_steps(every).expect("steps") == 0 {
                 break;
             }
             let cand = gpu.contact_candidates().expect("candidates");
+            let active = gpu.contact_active_slots().expect("active slots");
+            assert!(
+                active.windows(2).all(|w| w[0] < w[1]),
+                "{name}: active slots not in slot order"
+            );
             let (u, v) = gpu.nodes().expect("nodes");
             let mut v = v;
             // Positions now (dt -> 0): pairs in contact at the GPU's current configuration.
@@ -336,12 +346,50 @@ bodies = "all"
                      ({:?})",
                     cand[slot as usize]
                 );
+                assert!(
+                    active.binary_search(&slot).is_ok(),
+                    "{name}: slot {slot} is in contact, not an active GPU slot"
+                );
                 pairs += 1;
             }
+            for slot in set.active_wall_slots() {
+                assert!(
+                    active.binary_search(&slot).is_ok(),
+                    "{name}: wall slot {slot} is in contact, not an active GPU slot"
+                );
+                walls += 1;
+            }
+            // A pass slot is active exactly when it has candidates.
+            for (k, c) in cand
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| !tables.slots[*k].wall)
+            {
+                assert_eq!(
+                    !c.is_empty(),
+                    active.binary_search(&(k as u32)).is_ok(),
+                    "{name}: slot {k} with {} candidates",
+                    c.len()
+                );
+            }
+            inactive_walls += tables
+                .slots
+                .iter()
+                .enumerate()
+                .filter(|(k, s)| s.wall && active.binary_search(&(*k as u32)).is_err())
+                .count();
             checked += 1;
         }
-        println!("{name}: {pairs} active pairs in {checked} checks, all GPU candidates");
+        println!(
+            "{name}: {pairs} active pairs in {checked} checks, all GPU candidates; {walls} wall \
+             contacts, all active GPU slots ({inactive_walls} wall slots inactive in all)"
+        );
         assert!(checked > 0, "{name}");
+        // The wall scenes touch their walls in the checks, and skip their far wall slots.
+        if name == "pile" || name == "disk_wall" {
+            assert!(walls > 0, "{name}: no wall contact checked");
+            assert!(inactive_walls > 0, "{name}: every wall slot active");
+        }
         total += pairs;
     }
     assert!(total > 100, "only {total} active pairs checked");

@@ -2,8 +2,10 @@
 //! rigid walls. The step's CONTACT stage, by file (each beside its WGSL kernel):
 //!
 //! - [`search`]: positions of the step, whether a search is due, candidates from a hashed uniform
-//!   grid and a colouring of the slots, all on the device (no readback of the nodes);
-//! - [`narrow`]: each slot's constraint, the penalty impulses and the Lagrange warm starts;
+//!   grid, the active slots (those that can touch before the next search: a pass slot with
+//!   candidates, a wall slot within the margin of its wall) and a colouring of the slots, all on
+//!   the device (no readback of the nodes);
+//! - [`narrow`]: each active slot's constraint, the penalty impulses and the Lagrange warm starts;
 //! - [`solve`]: the diagonal-mass Lagrange correction (projected Gauss-Seidel by colours, in one
 //!   workgroup or one dispatch per colour) and the active-set update;
 //! - [`report`]: corrected velocities, u_{n+1}, the impulses' work and the interface reports.
@@ -59,6 +61,9 @@ pub const MAX_SWEEP_SLOTS: u32 = 80;
 pub const CG: u32 = 64;
 /// Colouring rounds recorded at first.
 pub const FIRST_ROUNDS: u32 = 24;
+/// Indirect entry of the kernels over the active slots (narrow phase, slot reports; WGSL
+/// `ACTIVE_ENTRY`), written at each search after the search kernels' and the colours' entries.
+pub const ACTIVE_ENTRY: u32 = 14 + MAX_COLORS;
 /// Stride of the dynamic-offset index entries.
 const INDEX_STRIDE: u64 = 256;
 /// Index entries: colouring rounds and re-checks first, then (colour, sweep) pairs.
@@ -116,6 +121,13 @@ pub struct ContactParams {
     pub f_usearch: u32,
     pub f_rp: u32,
     pub f_wp: u32,
+    /// ws offsets of the active slots (those that can have a constraint until the next search:
+    /// a pass slot with candidates, a wall slot near its wall): a flag per slot, their
+    /// exclusive prefix (n_slots + 1 words; the last is the count) and the list in slot order.
+    pub o_aflag: u32,
+    pub o_aoff: u32,
+    pub o_alist: u32,
+    pub _pad: u32,
 }
 
 /// Mirror of the first part of WGSL `ContactCtl` (the counters the host reads back).
@@ -185,7 +197,7 @@ pub struct GpuSegment {
 /// Size of WGSL `Cons` (scratch only).
 pub const CONS_SIZE: u64 = 64;
 
-const _: () = assert!(std::mem::size_of::<ContactParams>() == 160);
+const _: () = assert!(std::mem::size_of::<ContactParams>() == 176);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuSlot>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuSegment>() == 32);
@@ -351,6 +363,9 @@ fn layout_workspace(p: &mut ContactParams) -> Workspace {
     p.o_iface = take(p.n_ifaces + 1);
     p.o_act = take(ns);
     p.o_mask = take(nl);
+    p.o_aflag = take(ns);
+    p.o_aoff = take(ns + 1);
+    p.o_alist = take(ns);
     let words = at;
     let mut f = 0u32;
     let mut ftake = |n: u32| {
@@ -619,7 +634,7 @@ impl ContactState {
         );
         let ind = alloc.init(
             "contact_indirect",
-            &vec![0u8; 12 * (14 + MAX_COLORS as usize)],
+            &vec![0u8; 12 * (ACTIVE_ENTRY as usize + 1)],
             st | U::INDIRECT,
         );
         let entries_n = ROUND_ENTRIES
@@ -766,8 +781,12 @@ impl ContactState {
             pass.set_pipeline(pl);
             pass.dispatch_workgroups_indirect(&self.ind, 12 * e as u64);
         }
+        let active = |pass: &mut wgpu::ComputePass<'_>, pl: &wgpu::ComputePipeline| {
+            pass.set_pipeline(pl);
+            pass.dispatch_workgroups_indirect(&self.ind, 12 * ACTIVE_ENTRY as u64);
+        };
         if parts & PART_NARROW != 0 {
-            direct(pass, &k.narrow, g(p.n_slots));
+            active(pass, &k.narrow);
             direct(pass, &k.gather, g(p.n_local));
         }
         let solve = parts & PART_SOLVE != 0;
@@ -794,7 +813,7 @@ impl ContactState {
         }
         if parts & PART_REPORT != 0 {
             direct(pass, &k.finish, g(p.n_local));
-            direct(pass, &k.report_slots, g(p.n_slots));
+            active(pass, &k.report_slots);
             direct(pass, &k.report_end, 1);
         }
     }
