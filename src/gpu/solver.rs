@@ -43,10 +43,12 @@ pub struct GpuSolver {
     finished: bool,
     /// Offset of the contact counters in `readback`.
     counters_at: u64,
-    /// Staging buffer of the new history rows: main rows packed from 0, contact rows packed
-    /// from `contact_rows_at`.
+    /// Staging buffer of the new history rows: `n` rows copied at a time, the main rows packed
+    /// from 0 and the contact rows right after them ([`GpuSolver::row_bytes`]`(n)` in all), so
+    /// that a readback maps only the prefix it needs. Sized for a full history ring (a batch
+    /// that wrote more rows than were copied with it), which can be hundreds of MB with many
+    /// bodies: mapping it whole at every readback cost 0.2 s a batch on the 10^4-disk pile.
     rows_readback: wgpu::Buffer,
-    contact_rows_at: u64,
     /// Rows from `rows_read` on copied with the last submission (most batches write one).
     spec_rows: u32,
 }
@@ -176,7 +178,6 @@ impl GpuSolver {
             .as_ref()
             .map_or(0, |c| 4 * (row_cap as u64 * c.params.hist_stride as u64));
         let counters_at = 256;
-        let contact_rows_at = history_bytes;
         let rows_readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("rows_readback"),
             size: history_bytes + contact_row_bytes,
@@ -243,7 +244,6 @@ impl GpuSolver {
             finished: false,
             counters_at,
             rows_readback,
-            contact_rows_at,
             spec_rows: 0,
         })
     }
@@ -439,7 +439,13 @@ impl GpuSolver {
         };
         let _ = rows_rb;
         let hist: &[u8] = &rows_bytes[..hist_len];
-        let at = self.contact_rows_at as usize;
+        // The contact rows follow the main rows copied (the spec rows or the rows read).
+        let copied = if new_rows <= self.spec_rows as usize {
+            self.spec_rows as usize
+        } else {
+            new_rows
+        };
+        let at = 4 * stride * copied;
         let chist: &[u8] = &rows_bytes[at..at + 4 * cstride * new_rows];
         let nb = self.names.bodies.len();
         // The plastic work's word before the bodies' (plastic scenes).
@@ -577,8 +583,8 @@ impl GpuSolver {
         Ok(())
     }
 
-    /// Records copies of the `n` history rows from `rows_read` on (main rows, then contact rows,
-    /// each packed in order) into the rows staging buffer.
+    /// Records copies of the `n` history rows from `rows_read` on (the main rows packed from 0,
+    /// then the contact rows packed right after them) into the rows staging buffer.
     fn copy_rows(&self, enc: &mut wgpu::CommandEncoder, n: usize) {
         let cap = self.state.params.row_capacity as usize;
         let first = self.rows_read as usize % cap;
@@ -612,7 +618,7 @@ impl GpuSolver {
             copy(
                 &c.history,
                 c.params.hist_stride as usize,
-                self.contact_rows_at,
+                4 * (n * self.state.params.row_stride as usize) as u64,
             );
         }
     }
@@ -630,11 +636,15 @@ impl GpuSolver {
     /// Maps the control readback and the rows copied with the submission in one round trip.
     fn map_with_rows(&mut self, readback: &wgpu::Buffer) -> Result<(Vec<u8>, Vec<u8>)> {
         let rows = self.rows_readback.clone();
-        self.counters.bytes_read_back += readback.size() + self.row_bytes(self.spec_rows as usize);
+        let rows_len = self.row_bytes(self.spec_rows as usize);
+        self.counters.bytes_read_back += readback.size() + rows_len;
         let a = readback.slice(..);
-        let b = rows.slice(..);
+        // Only the rows copied with the submission (none: nothing to map).
+        let b = (rows_len > 0).then(|| rows.slice(..rows_len));
         a.map_async(wgpu::MapMode::Read, |_| {});
-        b.map_async(wgpu::MapMode::Read, |_| {});
+        if let Some(b) = &b {
+            b.map_async(wgpu::MapMode::Read, |_| {});
+        }
         self.ctx
             .device
             .poll(wgpu::PollType::wait_indefinitely())
@@ -644,9 +654,11 @@ impl GpuSolver {
                 .map_err(|e| Error::Gpu(format!("cannot map readback buffer: {e:?}")))?
                 .to_vec())
         };
-        let out = (get(a)?, get(b)?);
+        let out = (get(a)?, b.map(get).transpose()?.unwrap_or_default());
         readback.unmap();
-        rows.unmap();
+        if rows_len > 0 {
+            rows.unmap();
+        }
         Ok(out)
     }
 
@@ -663,10 +675,7 @@ impl GpuSolver {
         self.ctx.queue.submit([enc.finish()]);
         let rb = self.rows_readback.clone();
         self.counters.readbacks += 1;
-        let bytes = self.map_prefix(&rb, rb.size())?;
-        self.counters.bytes_read_back -= rb.size();
-        self.counters.bytes_read_back += self.row_bytes(n);
-        Ok(bytes)
+        self.map_prefix(&rb, self.row_bytes(n))
     }
 
     /// A contact search stopped the step because a contact buffer is too small: grows it (from
