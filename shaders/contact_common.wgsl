@@ -77,7 +77,7 @@ struct ContactParams {
     o_aflag: u32,
     o_aoff: u32,
     o_alist: u32,
-    _pad: u32,
+    split: u32,           // 1: the one-workgroup solve's re-checks run as their own dispatches
 }
 
 // Indirect entry of the kernels over the active slots (src/gpu/contact/mod.rs ACTIVE_ENTRY).

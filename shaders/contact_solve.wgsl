@@ -7,7 +7,10 @@
 //
 // Two paths, chosen by size on the host: `solve_one`, every sweep in one workgroup (colours
 // separated by barriers; the fastest for small contact sets), and `sweep_color` + `recheck`, one
-// dispatch per colour and sweep over as many workgroups as the colour needs.
+// dispatch per colour and sweep over as many workgroups as the colour needs. With many active
+// slots (cc.p.split) the one-workgroup path leaves its re-checks to `recheck_active`, one thread
+// per active slot over many workgroups, dispatched between its rounds: the same constraints, the
+// same sweeps, the same bits.
 
 const ACTIVE_SET_ROUNDS: u32 = 4u;    // crate::contact::ACTIVE_SET_ROUNDS
 
@@ -17,6 +20,7 @@ var<workgroup> sh_nc: u32;
 var<workgroup> sh_off: array<u32, 34>;   // colour offsets of the compacted slots (SERIAL + 2)
 var<workgroup> sh_max: atomic<u32>;
 var<workgroup> sh_pre: array<u32, RG>;
+var<workgroup> sh_split: u32;
 
 // Whether any invocation's `x` is positive, as a workgroup-uniform value: a tree over sh_m with
 // barriers, written by invocation 0 into a plain workgroup word. (Every exit of the solve loops
@@ -219,23 +223,33 @@ fn recheck_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> bool {
     return true;
 }
 
+// The one-workgroup solve. Split (cc.p.split), this dispatch is round r = round_index.x of it:
+// round 0 the first sweeps, round r > 0 the sweeps after `recheck_active` r - 1 when that added
+// constraints; unsplit, every round here, each re-check over the active slots in this workgroup.
 @compute @workgroup_size(RG)
 fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
     if (!running_uniform(l)) {
         return;
     }
+    let r = round_index.x;
     if (l == 0u) {
-        sh_w = select(0u, 1u, atomicLoad(&cc.lagrange) > 0u);
+        sh_split = cc.p.split;
+        if (cc.p.split != 0u && r > 0u) {
+            sh_w = select(0u, 1u, atomicLoad(&cc.added[r - 1u]) > 0u);
+        } else {
+            sh_w = select(0u, 1u, atomicLoad(&cc.lagrange) > 0u);
+        }
     }
     if (workgroupUniformLoad(&sh_w) == 0u) {
         return;
     }
+    let split = workgroupUniformLoad(&sh_split) != 0u;
     let dt = ctrl.dt_next;
     let dtn = ctrl.dt_node;
     let inv_scale = inv_mass_scale();
     var taken = sweeps_one(l, dt, inv_scale);
-    for (var round = 0u; round < ACTIVE_SET_ROUNDS; round++) {
+    for (var round = 0u; round < ACTIVE_SET_ROUNDS && !split; round++) {
         var added = 0.0;
         let na = active_count();
         for (var j = l; j < na; j += RG) {
@@ -250,7 +264,29 @@ fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
         taken += sweeps_one(l, dt, inv_scale);
     }
     if (l == 0u) {
-        cc.sweeps = taken;
+        cc.sweeps += taken;
+    }
+}
+
+// Re-check r = round_index.x of the split one-workgroup solve, one thread per active slot:
+// runs when round r of `solve_one` swept (r = 0: the step has Lagrange constraints; r > 0:
+// re-check r - 1 added some), and counts the constraints it adds for round r + 1.
+@compute @workgroup_size(CG)
+fn recheck_active(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (!contact_running()) {
+        return;
+    }
+    let r = round_index.x;
+    if (r == 0u) {
+        if (atomicLoad(&cc.lagrange) == 0u) {
+            return;
+        }
+    } else if (atomicLoad(&cc.added[r - 1u]) == 0u) {
+        return;
+    }
+    let j = gid.x;
+    if (j < active_count() && recheck_slot(active_slot(j), ctrl.dt_next, ctrl.dt_node, inv_mass_scale())) {
+        atomicAdd(&cc.added[r], 1u);
     }
 }
 

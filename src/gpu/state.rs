@@ -508,6 +508,9 @@ impl GpuState {
                 let multi = contact
                     .multi
                     .unwrap_or_else(|| super::contact::multi_path(set.slot_count(), device_type));
+                let split = contact
+                    .split
+                    .unwrap_or_else(|| super::contact::split_path(set.slot_count(), device_type));
                 Some(ContactState::new(
                     device,
                     p,
@@ -521,6 +524,7 @@ impl GpuState {
                     },
                     row_cap,
                     multi,
+                    split,
                     contact.candidate_capacity,
                     &mut a,
                 )?)

@@ -237,6 +237,49 @@ fn gpu_per_colour_solve_matches_the_one_workgroup_solve_and_the_cpu() {
     );
 }
 
+/// The one-workgroup solve with its active-set re-checks as their own dispatches over the active
+/// slots (the path of many slots on GPUs) gives the bits of the solve that re-checks inside its
+/// workgroup: the same constraints, rows, sweeps and displacements, on the pile and on the
+/// striker whose re-checks add constraints.
+#[test]
+fn gpu_split_rechecks_give_the_bits_of_the_one_workgroup_solve() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let pile = asset_path("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
+    let striker = asset_path("stress/striker_plate_gpu_energy.toml");
+    for (name, text) in [("pile", pile), ("striker", striker)] {
+        let with = |split: bool| ContactOptions {
+            multi: Some(false),
+            split: Some(split),
+            ..ContactOptions::default()
+        };
+        let (r1, _, u1, _) = run_gpu_with(&ctx, &text, &format!("{name}-inside"), with(false));
+        let (r2, _, u2, _) = run_gpu_with(&ctx, &text, &format!("{name}-split"), with(true));
+        println!(
+            "{name}: sweeps mean {:.2} max {} (inside the workgroup) and {:.2} max {} (split), \
+             {} steps",
+            r1.summary.contact_sweeps_mean,
+            r1.summary.contact_sweeps_max,
+            r2.summary.contact_sweeps_mean,
+            r2.summary.contact_sweeps_max,
+            r1.summary.steps
+        );
+        assert!(r1.summary.contact_sweeps_max > 0, "{name}: the solve ran");
+        assert_eq!(history_bits(&r1), history_bits(&r2), "{name}: rows differ");
+        assert_eq!(
+            u1.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>(),
+            u2.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>(),
+            "{name}: displacements differ"
+        );
+        assert_eq!(
+            r1.summary.contact_sweeps_mean.to_bits(),
+            r2.summary.contact_sweeps_mean.to_bits(),
+            "{name}: sweeps differ"
+        );
+        assert_eq!(r1.summary.contact_sweeps_max, r2.summary.contact_sweeps_max);
+    }
+}
+
 /// Every (slot, segment) pair that parry's broad phase yields and the CPU narrow phase activates
 /// at the GPU's current positions is among the candidates of the GPU's last search, and its slot,
 /// like every wall slot the CPU activates, among the search's active slots (the only ones the

@@ -127,7 +127,9 @@ pub struct ContactParams {
     pub o_aflag: u32,
     pub o_aoff: u32,
     pub o_alist: u32,
-    pub _pad: u32,
+    /// 1: the one-workgroup solve's active-set re-checks run as their own dispatches over the
+    /// active slots (`recheck_active`, many workgroups), between rounds of `solve_one`.
+    pub split: u32,
 }
 
 /// Mirror of the first part of WGSL `ContactCtl` (the counters the host reads back).
@@ -217,6 +219,7 @@ pub struct ContactKernels {
     solve_one: wgpu::ComputePipeline,
     sweep_color: wgpu::ComputePipeline,
     recheck: wgpu::ComputePipeline,
+    recheck_active: wgpu::ComputePipeline,
     finish: wgpu::ComputePipeline,
     report_slots: wgpu::ComputePipeline,
     report_end: wgpu::ComputePipeline,
@@ -315,6 +318,7 @@ impl ContactKernels {
             solve_one: pipe(&solve_m, &main, "solve_one"),
             sweep_color: pipe(&solve_m, &main, "sweep_color"),
             recheck: pipe(&solve_m, &main, "recheck"),
+            recheck_active: pipe(&solve_m, &main, "recheck_active"),
             finish: pipe(&report_m, &main, "finish"),
             report_slots: pipe(&report_m, &main, "report_slots"),
             report_end: pipe(&report_m, &main, "report_end"),
@@ -441,6 +445,10 @@ pub struct ContactOptions {
     /// The per-colour solve path (`Some(true)`) or one workgroup (`Some(false)`); `None`:
     /// [`multi_path`].
     pub multi: Option<bool>,
+    /// On the one-workgroup path, the active-set re-checks as their own dispatches over many
+    /// workgroups (`Some(true)`) or inside the solve's workgroup (`Some(false)`); `None`:
+    /// [`split_path`]. Either gives the same bits.
+    pub split: Option<bool>,
     /// Initial candidate capacity (words); `None`: 4 per slot, at least 1024. A search that
     /// needs more grows the buffer.
     pub candidate_capacity: Option<u32>,
@@ -451,9 +459,16 @@ pub fn multi_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
     device_type != wgpu::DeviceType::Cpu && slots >= solve::MULTI_SLOTS
 }
 
+/// Whether the one-workgroup solve leaves its re-checks to their own dispatches, for `slots`
+/// slots on an adapter of `device_type` (see [`solve::SPLIT_SLOTS`]).
+pub fn split_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
+    device_type != wgpu::DeviceType::Cpu && slots >= solve::SPLIT_SLOTS
+}
+
 impl ContactState {
     /// Buffers of `set` (the model's contacts); `alloc` records each buffer for the plan report.
-    /// `multi`: the per-colour solve path (else one workgroup).
+    /// `multi`: the per-colour solve path (else one workgroup); `split`: on the one-workgroup
+    /// path, the re-checks as their own dispatches.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
         device: &wgpu::Device,
@@ -463,6 +478,7 @@ impl ContactState {
         shared: Shared<'_>,
         row_capacity: u32,
         multi: bool,
+        split: bool,
         candidate_capacity: Option<u32>,
         alloc: &mut Alloc<'_>,
     ) -> Result<ContactState> {
@@ -571,6 +587,7 @@ impl ContactState {
             n_nodes: model.node_count() as u32,
             tolerance: (solve::TOLERANCE * t.margin) as f32,
             friction: u32::from(friction),
+            split: u32::from(split && !multi),
             ..Default::default()
         };
         let work = layout_workspace(&mut params);
@@ -790,7 +807,18 @@ impl ContactState {
             direct(pass, &k.gather, g(p.n_local));
         }
         let solve = parts & PART_SOLVE != 0;
-        if solve && p.multi == 0 {
+        if solve && p.multi == 0 && p.split != 0 {
+            // Round r of the solve, then its re-check r over the active slots (index entry r).
+            let rounds = crate::contact::ACTIVE_SET_ROUNDS as u64;
+            for r in 0..=rounds {
+                bind(pass, r);
+                direct(pass, &k.solve_one, 1);
+                if r < rounds {
+                    active(pass, &k.recheck_active);
+                }
+            }
+            bind(pass, 0);
+        } else if solve && p.multi == 0 {
             direct(pass, &k.solve_one, 1);
         } else if solve {
             let rounds = MAX_SWEEP_SLOTS / p.max_sweeps;

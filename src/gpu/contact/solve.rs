@@ -1,6 +1,7 @@
 //! The diagonal-mass Lagrange correction on the device (`shaders/contact_solve.wgsl`): projected
 //! Gauss-Seidel over the colours of the last search and the active-set update, either in one
-//! workgroup (`solve_one`) or one dispatch per colour and sweep (`sweep_color`, `recheck`). CPU
+//! workgroup (`solve_one`, its re-checks inside it or, with many slots, in `recheck_active`
+//! over many workgroups) or one dispatch per colour and sweep (`sweep_color`, `recheck`). CPU
 //! reference: the sweeps and re-check of [`crate::contact::ContactSet::apply`].
 
 /// WGSL source (compiled after [`super::narrow::SOURCE`]).
@@ -27,3 +28,16 @@ pub const TOLERANCE: f64 = 1e-4;
 /// one-workgroup solve on every bench scene up to 10^6 elements (the striker at 10^6: 1.86 ms
 /// with 65 sweeps a step, against 3.53 ms). So the one workgroup is used up to 2^20 slots.
 pub const MULTI_SLOTS: usize = 1 << 20;
+
+/// Slots from which the one-workgroup solve leaves its active-set re-checks to their own
+/// dispatches (`recheck_active`, one thread per active slot) on a discrete or integrated GPU:
+/// each re-check runs the narrow phase again on every active slot, which the solve's one
+/// workgroup does serially. Split, a step records 4 re-checks and 4 more rounds of `solve_one`,
+/// most of which return at once.
+///
+/// Measured on an NVIDIA H100 (BENCHMARKS.md, session 16; device time of the solve part, the
+/// disks in contact): the 10^6-element pile (480 000 slots) 335 -> 134 us a step split, the
+/// step 1 070 -> 855 us; the 10^5 pile (49 152 slots) 47 -> 51 us, and the 10^5 striker
+/// (about 2 000 slots, 100 sweeps a step) 1 038 -> 1 068 us: below this size the extra
+/// dispatches cost more than the re-checks they spread.
+pub const SPLIT_SLOTS: usize = 1 << 16;
