@@ -862,6 +862,25 @@ pub fn bench_schedule(scene: &Scene) -> crate::step::Schedule {
     s
 }
 
+/// How a contact scene is timed ([`cpu_contact`], [`gpu_contact`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactTiming {
+    /// Steps timed of each variant, split over `rounds` rounds in alternation.
+    pub steps: u64,
+    /// Rounds (medians reported).
+    pub rounds: u32,
+    /// Steps each variant runs before the timed ones (at least 2: the first search): the pile's
+    /// disks reach the wall after about 440 steps, its bottom row all touches by 600.
+    pub warmup: u64,
+    /// How the pile puts its disks in contact.
+    pub pile: PileContact,
+    /// A Coulomb coefficient for a third variant with friction on every contact and wall.
+    pub friction: Option<f64>,
+}
+
+/// Warm-up steps of a contact row unless asked for more: two, the first search included.
+pub const DEFAULT_WARMUP: u64 = 2;
+
 /// One row of the contact-scene table.
 #[derive(Debug, Clone, Serialize)]
 pub struct ContactRow {
@@ -881,6 +900,8 @@ pub struct ContactRow {
     pub steps: u64,
     /// Rounds the steps were split into, the two variants timed in alternation.
     pub rounds: u32,
+    /// Steps each variant ran before the timed ones.
+    pub warmup: u64,
     /// Wall seconds of the timed steps with contact.
     pub wall_seconds: f64,
     /// Steps per second with contact.
@@ -960,7 +981,8 @@ impl Timed for GpuSolver {
 }
 
 /// Times two solvers of a contact scene (with and without its contact) in alternating rounds
-/// (after two warm-up steps each, the first search included) and fills a row.
+/// (after `timing.warmup` warm-up steps each, at least 2: the first search included) and fills a
+/// row.
 #[allow(clippy::too_many_arguments)]
 fn contact_row<S: Timed>(
     which: ContactScene,
@@ -971,22 +993,22 @@ fn contact_row<S: Timed>(
     with: &mut S,
     without: &mut S,
     mut friction: Option<(f64, &mut S)>,
-    steps: u64,
-    rounds: u32,
+    timing: &ContactTiming,
 ) -> Result<ContactRow> {
-    let rounds = rounds.max(1);
-    let per = per_round(steps, rounds);
+    let rounds = timing.rounds.max(1);
+    let per = per_round(timing.steps, rounds);
+    let warmup = timing.warmup.max(DEFAULT_WARMUP);
     let mut warm: Vec<(&str, &mut S)> = vec![("contact", &mut *with), ("free", &mut *without)];
     if let Some((_, f)) = friction.as_mut() {
         warm.push(("friction", &mut **f));
     }
     for (what, s) in warm {
-        let taken = s.take(2)?;
-        if taken < 2 {
+        let taken = s.take(warmup)?;
+        if taken < warmup {
             return Err(stopped(
                 &format!("{backend} {} {what} warm-up", which.name()),
                 taken,
-                2,
+                warmup,
             ));
         }
     }
@@ -1051,6 +1073,7 @@ fn contact_row<S: Timed>(
         bodies: model.bodies.len(),
         steps: total,
         rounds,
+        warmup,
         wall_seconds: wall,
         steps_per_second: total as f64 / wall,
         free_seconds: t[1].iter().sum(),
@@ -1106,14 +1129,8 @@ fn contact_build(
 ///
 /// # Errors
 /// Scene errors, or [`Error::Bench`] when a run stops before it took all its steps.
-pub fn cpu_contact(
-    which: ContactScene,
-    size: usize,
-    steps: u64,
-    rounds: u32,
-    pile: PileContact,
-    friction: Option<f64>,
-) -> Result<ContactRow> {
+pub fn cpu_contact(which: ContactScene, size: usize, timing: &ContactTiming) -> Result<ContactRow> {
+    let (pile, friction) = (timing.pile, timing.friction);
     let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
     let mut with = CpuSolver::new(model.clone(), plan, schedule);
     let (m, p, s) = contact_build(which, size, false, pile, None)?;
@@ -1134,8 +1151,7 @@ pub fn cpu_contact(
         &mut with,
         &mut without,
         rough.as_mut().map(|(mu, s)| (*mu, s)),
-        steps,
-        rounds,
+        timing,
     )
 }
 
@@ -1149,11 +1165,9 @@ pub fn gpu_contact(
     ctx: Arc<GpuContext>,
     which: ContactScene,
     size: usize,
-    steps: u64,
-    rounds: u32,
-    pile: PileContact,
-    friction: Option<f64>,
+    timing: &ContactTiming,
 ) -> Result<ContactRow> {
+    let (pile, friction) = (timing.pile, timing.friction);
     let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
     let mut with = GpuSolver::new(ctx.clone(), &model, &plan, schedule)?;
     let (m, p, s) = contact_build(which, size, false, pile, None)?;
@@ -1174,8 +1188,7 @@ pub fn gpu_contact(
         &mut with,
         &mut without,
         rough.as_mut().map(|(mu, s)| (*mu, s)),
-        steps,
-        rounds,
+        timing,
     )
 }
 
@@ -1311,10 +1324,45 @@ mod tests {
         }
     }
 
+    fn timing(steps: u64, rounds: u32, pile: PileContact, friction: Option<f64>) -> ContactTiming {
+        ContactTiming {
+            steps,
+            rounds,
+            warmup: DEFAULT_WARMUP,
+            pile,
+            friction,
+        }
+    }
+
+    /// `warmup` runs each variant of a contact scene that many steps before the timed ones: the
+    /// pile's disks (half a millimetre above the wall at 20 m/s, about 440 steps) are in contact
+    /// in the timed steps after 600 of them, and not after the default 2.
+    #[test]
+    fn contact_rows_warm_up_into_contact_when_asked() {
+        let cold = timing(20, 2, PileContact::All, None);
+        let warm = ContactTiming {
+            warmup: 600,
+            ..cold
+        };
+        let cold = cpu_contact(ContactScene::Pile, 2, &cold).expect("bench row");
+        let warm = cpu_contact(ContactScene::Pile, 2, &warm).expect("bench row");
+        assert_eq!((cold.warmup, warm.warmup), (DEFAULT_WARMUP, 600));
+        assert_eq!((warm.steps, warm.rounds), (20, 2));
+        assert_eq!(cold.sweeps_mean, 0.0, "no contact in the first 22 steps");
+        assert!(
+            warm.sweeps_mean > 0.0,
+            "the disks touch the wall after 600 steps"
+        );
+    }
+
     #[test]
     fn contact_rows_on_the_cpu_take_their_steps() {
-        let row =
-            cpu_contact(ContactScene::Striker, 4, 4, 2, PileContact::Pairs, None).expect("row");
+        let row = cpu_contact(
+            ContactScene::Striker,
+            4,
+            &timing(4, 2, PileContact::Pairs, None),
+        )
+        .expect("row");
         assert_eq!((row.steps, row.elements, row.bodies), (4, 96, 2));
         assert!(row.steps_per_second > 0.0 && row.bytes_read_back_per_step == 0.0);
         assert!(row.friction_us_per_step.is_none());
@@ -1332,8 +1380,12 @@ mod tests {
         );
         let scene = Scene::parse(&text, Path::new("pile.toml")).expect("parses");
         assert!(scene.contacts.iter().all(|c| c.friction == 0.3));
-        let row =
-            cpu_contact(ContactScene::Pair, 4, 4, 2, PileContact::All, Some(0.3)).expect("row");
+        let row = cpu_contact(
+            ContactScene::Pair,
+            4,
+            &timing(4, 2, PileContact::All, Some(0.3)),
+        )
+        .expect("row");
         assert_eq!(row.friction, Some(0.3));
         assert!(row.friction_steps_per_second.is_some_and(|f| f > 0.0));
         assert!(row.friction_us_per_step.is_some_and(f64::is_finite));

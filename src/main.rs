@@ -148,6 +148,11 @@ enum Command {
         /// Rounds the steps are split into, each variant timed in alternation (medians reported).
         #[arg(long, default_value_t = ricochet::bench::DEFAULT_ROUNDS)]
         rounds: u32,
+        /// Steps each variant of a contact scene runs before the timed ones (at least 2, the
+        /// first search): e.g. 600 to time the pile in contact (its disks reach the wall after
+        /// about 440 steps).
+        #[arg(long, default_value_t = ricochet::bench::DEFAULT_WARMUP)]
+        warmup: u64,
         /// Also write the table(s) as JSON: the block rows as an array; with a contact scene,
         /// an object {"block": [...], "contact": [...]}.
         #[arg(long)]
@@ -306,6 +311,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             friction,
             steps,
             rounds,
+            warmup,
             json,
             adapter,
         } => {
@@ -420,22 +426,19 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                             which.elements(size)
                         )
                     };
+                    let timing = ricochet::bench::ContactTiming {
+                        steps,
+                        rounds,
+                        warmup,
+                        pile,
+                        friction,
+                    };
                     if run_cpu {
-                        let row = ricochet::bench::cpu_contact(
-                            which, size, steps, rounds, pile, friction,
-                        );
+                        let row = ricochet::bench::cpu_contact(which, size, &timing);
                         push(what("cpu"), row);
                     }
                     if let Some(ctx) = &ctx {
-                        let row = ricochet::bench::gpu_contact(
-                            ctx.clone(),
-                            which,
-                            size,
-                            steps,
-                            rounds,
-                            pile,
-                            friction,
-                        );
+                        let row = ricochet::bench::gpu_contact(ctx.clone(), which, size, &timing);
                         push(what("gpu"), row);
                     }
                 }
