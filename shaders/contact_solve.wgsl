@@ -9,8 +9,8 @@
 // separated by barriers; the fastest for small contact sets), and `sweep_color` + `recheck`, one
 // dispatch per colour and sweep over as many workgroups as the colour needs. With many active
 // slots (cc.p.split) the one-workgroup path leaves its re-checks to `recheck_active`, one thread
-// per active slot over many workgroups, dispatched between its rounds: the same constraints, the
-// same sweeps, the same bits.
+// per active slot over many workgroups, dispatched between its rounds: the same constraints and
+// arithmetic (the same bits on lavapipe; an H100 rounds the two kernels apart by 1e-9).
 
 const ACTIVE_SET_ROUNDS: u32 = 4u;    // crate::contact::ACTIVE_SET_ROUNDS
 
