@@ -223,6 +223,15 @@ fn recheck_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> bool {
     return true;
 }
 
+// Whether round r of the split one-workgroup solve (and the re-check after it) runs: round 0
+// when the step has Lagrange constraints, round r > 0 when re-check r - 1 added some.
+fn split_round_runs(r: u32) -> bool {
+    if (r == 0u) {
+        return atomicLoad(&cc.lagrange) > 0u;
+    }
+    return atomicLoad(&cc.added[r - 1u]) > 0u;
+}
+
 // The one-workgroup solve. Split (cc.p.split), this dispatch is round r = round_index.x of it:
 // round 0 the first sweeps, round r > 0 the sweeps after `recheck_active` r - 1 when that added
 // constraints; unsplit, every round here, each re-check over the active slots in this workgroup.
@@ -232,14 +241,10 @@ fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (!running_uniform(l)) {
         return;
     }
-    let r = round_index.x;
     if (l == 0u) {
         sh_split = cc.p.split;
-        if (cc.p.split != 0u && r > 0u) {
-            sh_w = select(0u, 1u, atomicLoad(&cc.added[r - 1u]) > 0u);
-        } else {
-            sh_w = select(0u, 1u, atomicLoad(&cc.lagrange) > 0u);
-        }
+        // Unsplit, the one dispatch is round 0.
+        sh_w = select(0u, 1u, split_round_runs(select(0u, round_index.x, cc.p.split != 0u)));
     }
     if (workgroupUniformLoad(&sh_w) == 0u) {
         return;
@@ -277,11 +282,7 @@ fn recheck_active(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let r = round_index.x;
-    if (r == 0u) {
-        if (atomicLoad(&cc.lagrange) == 0u) {
-            return;
-        }
-    } else if (atomicLoad(&cc.added[r - 1u]) == 0u) {
+    if (!split_round_runs(r)) {
         return;
     }
     let j = gid.x;

@@ -411,7 +411,6 @@ impl GpuSolver {
     /// Reads back the control block and the new history rows.
     fn read(&mut self, events: &mut Vec<Event>) -> Result<()> {
         let readback = self.readback.clone();
-        let rows_rb = self.rows_readback.clone();
         let (bytes, spec) = self.map_with_rows(&readback)?;
         self.counters.readbacks += 1;
         let ctrl: Control = bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<Control>()]);
@@ -437,7 +436,6 @@ impl GpuSolver {
         } else {
             self.read_rows(new_rows)?
         };
-        let _ = rows_rb;
         let hist: &[u8] = &rows_bytes[..hist_len];
         // The contact rows follow the main rows copied (the spec rows or the rows read).
         let copied = if new_rows <= self.spec_rows as usize {
