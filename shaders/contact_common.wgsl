@@ -78,6 +78,13 @@ struct ContactParams {
     o_aoff: u32,
     o_alist: u32,
     split: u32,           // 1: the one-workgroup solve's re-checks run as their own dispatches
+    // The one-workgroup solve's extrapolation between sweeps (crate::contact::extrapolation):
+    // (lambda, lt) after the last sweep per compacted constraint, the constraints' nodes, their
+    // dv after the last sweep.
+    o_lprev: u32,
+    o_nlist: u32,
+    o_dvp: u32,
+    extrapolate: u32,     // 1: extrapolate (one-workgroup path); 0: plain sweeps
 }
 
 // Indirect entry of the kernels over the active slots (src/gpu/contact/mod.rs ACTIVE_ENTRY).

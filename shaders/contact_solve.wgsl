@@ -1,7 +1,8 @@
 // The diagonal-mass Lagrange correction (CPU reference: crate::contact solve, ContactSet::sweep
 // and ::recheck): projected Gauss-Seidel sweeps over the colours of the last search (slots of one
 // colour share no node, so a colour is updated in parallel with the result of a sequential sweep:
-// deterministic), until no gap changes by more than cc.p.tolerance or cc.p.max_sweeps; then the
+// deterministic; in one workgroup extrapolated between sweeps as on the CPU), until no gap
+// changes by more than cc.p.tolerance or cc.p.max_sweeps; then the
 // active-set update (free Lagrange slots re-checked at the corrected positions, more sweeps when
 // any penetrates), ACTIVE_SET_ROUNDS rounds at most. Compiled after contact_narrow.wgsl.
 //
@@ -21,6 +22,8 @@ var<workgroup> sh_off: array<u32, 34>;   // colour offsets of the compacted slot
 var<workgroup> sh_max: atomic<u32>;
 var<workgroup> sh_pre: array<u32, RG>;
 var<workgroup> sh_split: u32;
+var<workgroup> sh_nn: u32;         // nodes of the compacted constraints (ws[o_nlist..])
+var<workgroup> sh_change: u32;     // f32 bits of the last sweep's largest change
 
 // Whether any invocation's `x` is positive, as a workgroup-uniform value: a tree over sh_m with
 // barriers, written by invocation 0 into a plain workgroup word. (Every exit of the solve loops
@@ -53,12 +56,6 @@ fn list_end(c: u32) -> u32 {
 // Colours of the one-workgroup solve: at most 32 by node masks, then one serial colour.
 const SERIAL: u32 = 32u;
 
-fn take_mask(i: u32, c: u32) {
-    if (i != NONE) {
-        ws[cc.p.o_mask + i] |= 1u << c;
-    }
-}
-
 fn mask_of(i: u32) -> u32 {
     if (i == NONE) {
         return 0u;
@@ -70,6 +67,19 @@ fn clear_mask(i: u32) {
     if (i != NONE) {
         ws[cc.p.o_mask + i] = 0u;
     }
+}
+
+// Marks node i with colour bit c; a node seen for the first time joins the list of the
+// constraints' nodes (ws[o_nlist..], sh_nn of them) that the extrapolation moves on.
+fn mark_node(i: u32, c: u32) {
+    if (i == NONE) {
+        return;
+    }
+    if (ws[cc.p.o_mask + i] == 0u) {
+        ws[cc.p.o_nlist + sh_nn] = i;
+        sh_nn += 1u;
+    }
+    ws[cc.p.o_mask + i] |= 1u << c;
 }
 
 // The step's Lagrange constraints coloured greedily in slot order by their own nodes (slave and
@@ -113,6 +123,7 @@ fn compact(l: u32) {
     workgroupBarrier();
     if (l == 0u) {
         let na = sh_nc;
+        sh_nn = 0u;
         var count: array<u32, 33>;
         for (var c = 0u; c <= SERIAL; c++) {
             count[c] = 0u;
@@ -125,10 +136,13 @@ fn compact(l: u32) {
             var col = SERIAL;
             if (used != 0xffffffffu) {
                 col = firstTrailingBit(~used);
-                take_mask(s, col);
-                take_mask(c.a, col);
-                take_mask(c.b, col);
             }
+            // (A serial constraint marks its nodes with colour 31 only to list them: a later
+            // constraint on them then avoids colour 31, which changes nothing else.)
+            let bit = min(col, 31u);
+            mark_node(s, bit);
+            mark_node(c.a, bit);
+            mark_node(c.b, bit);
             ws[cc.p.o_list + j] = col;
             count[col] += 1u;
         }
@@ -154,7 +168,52 @@ fn compact(l: u32) {
     workgroupBarrier();
 }
 
-// Sweeps in one workgroup over the compacted Lagrange slots; returns the sweeps taken.
+// The factor before the k-th sweep since the sweeps (re)started (crate::contact::extrapolation):
+// 0 for the first two, then EXTRAPOLATION.
+const EXTRAPOLATION: f32 = 0.9;       // crate::contact::EXTRAPOLATION
+fn extrapolation(k: u32) -> f32 {
+    if (k < 2u) {
+        return 0.0;
+    }
+    return EXTRAPOLATION;
+}
+
+// ContactSet::extrapolate: each compacted constraint's (lambda, lt) and each of their nodes' dv
+// moved on by beta times their change since the last call (no impulse: dv is linear in the
+// multipliers, and a negative multiplier is projected by its own update in the sweep); the
+// values reached are kept for the next call. beta = 0 only keeps them.
+fn extrapolate(l: u32, beta: f32) {
+    let na = sh_off[SERIAL + 1u];
+    for (var q = l; q < na; q += RG) {
+        let k = ws[cc.p.o_act + q];
+        let now = vec2<f32>(cons[k].lambda, cons[k].lt);
+        let at = cc.p.o_lprev + 2u * q;
+        if (beta != 0.0) {
+            let last = vec2<f32>(bitcast<f32>(ws[at]), bitcast<f32>(ws[at + 1u]));
+            cons[k].lambda = now.x + beta * (now.x - last.x);
+            cons[k].lt = now.y + beta * (now.y - last.y);
+        }
+        ws[at] = bitcast<u32>(now.x);
+        ws[at + 1u] = bitcast<u32>(now.y);
+    }
+    let nn = sh_nn;
+    for (var j = l; j < nn; j += RG) {
+        let i = ws[cc.p.o_nlist + j];
+        let now = dv(i);
+        let at = cc.p.o_dvp + 2u * j;
+        if (beta != 0.0) {
+            let last = vec2<f32>(bitcast<f32>(ws[at]), bitcast<f32>(ws[at + 1u]));
+            add_dv(i, beta * (now - last));
+        }
+        ws[at] = bitcast<u32>(now.x);
+        ws[at + 1u] = bitcast<u32>(now.y);
+    }
+    storageBarrier();
+}
+
+// Sweeps in one workgroup over the compacted Lagrange slots, extrapolated between sweeps when
+// cc.p.extrapolate (the count restarts when a sweep changes a gap more than the one before);
+// returns the sweeps taken.
 fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
     compact(l);
     if (l == 0u) {
@@ -167,8 +226,22 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
         sh_nc = nc;
     }
     let nc = workgroupUniformLoad(&sh_nc);
+    if (l == 0u) {
+        sh_w = cc.p.extrapolate;
+    }
+    let extrapolating = workgroupUniformLoad(&sh_w) != 0u;
     var taken = 0u;
+    var run = 0u;
+    var last = 3.0e38;
     for (var sweep = 0u; sweep < cc.p.max_sweeps; sweep++) {
+        // (At the start of a run, before sweep 0 and the first sweep after a restart, the values
+        // kept would not be used: the next factor is 0 as well, and its call keeps them again.)
+        if (extrapolating && sweep > 0u) {
+            if (run > 0u) {
+                extrapolate(l, extrapolation(run));
+            }
+            run += 1u;
+        }
         if (l == 0u) {
             atomicStore(&sh_max, 0u);
         }
@@ -191,9 +264,14 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
         atomicMax(&sh_max, bitcast<u32>(change));
         workgroupBarrier();
         if (l == 0u) {
-            sh_w = select(0u, 1u, bitcast<f32>(atomicLoad(&sh_max)) > cc.p.tolerance);
+            sh_change = atomicLoad(&sh_max);
         }
-        if (workgroupUniformLoad(&sh_w) == 0u) {
+        let largest = bitcast<f32>(workgroupUniformLoad(&sh_change));
+        if (largest > last) {
+            run = 0u;
+        }
+        last = largest;
+        if (!(largest > cc.p.tolerance)) {
             return taken;
         }
     }

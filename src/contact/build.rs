@@ -339,6 +339,11 @@ impl ContactSet {
             penalty_step: None,
             penalty_bounded: 0,
             cons: Vec::new(),
+            plain_sweeps: false,
+            last_lambda: Vec::new(),
+            last_dv: Vec::new(),
+            touched: Vec::new(),
+            mark: Vec::new(),
         };
         set.penalty_step = set.compute_penalty_step();
         Some(set)

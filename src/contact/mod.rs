@@ -42,7 +42,10 @@ use crate::scene::ContactMethod;
 
 pub use overlap::Overlap;
 pub use report::ContactSample;
-pub use solve::{penalty_impulse, SweepStats, ACTIVE_SET_ROUNDS, MAX_SWEEPS, SWEEP_TOLERANCE};
+pub use solve::{
+    extrapolation, penalty_impulse, SweepStats, ACTIVE_SET_ROUNDS, EXTRAPOLATION, MAX_SWEEPS,
+    SWEEP_TOLERANCE,
+};
 pub use tables::{SegmentTable, SlotTable, Tables};
 
 use report::Interface;
@@ -280,12 +283,32 @@ pub struct ContactSet {
     #[serde(default)]
     dvt: Vec<[f64; 2]>,
     cons: Vec<Constraint>,
+    /// Plain projected Gauss-Seidel, without the sweeps' extrapolation (see
+    /// [`extrapolation`]); for comparisons.
+    #[serde(default)]
+    plain_sweeps: bool,
+    /// Scratch of the extrapolated sweeps: each Lagrange constraint's (lambda, lt) and each of
+    /// their nodes' (dv, dvt) after the last sweep, the nodes, and a mark per local node.
+    #[serde(skip)]
+    last_lambda: Vec<[f64; 2]>,
+    #[serde(skip)]
+    last_dv: Vec<[[f64; 2]; 2]>,
+    #[serde(skip)]
+    touched: Vec<u32>,
+    #[serde(skip)]
+    mark: Vec<bool>,
 }
 
 impl ContactSet {
     /// Names of the contacts and walls, in history-column order.
     pub fn names(&self) -> Vec<String> {
         self.interfaces.iter().map(|i| i.name.clone()).collect()
+    }
+
+    /// Plain projected Gauss-Seidel sweeps (`true`), or extrapolated ones (the default; see
+    /// [`extrapolation`]).
+    pub fn set_plain_sweeps(&mut self, plain: bool) {
+        self.plain_sweeps = plain;
     }
 
     /// Search margin (half the shortest segment).

@@ -525,6 +525,7 @@ impl GpuState {
                     row_cap,
                     multi,
                     split,
+                    !contact.plain_sweeps,
                     contact.candidate_capacity,
                     &mut a,
                 )?)

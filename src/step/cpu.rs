@@ -220,6 +220,12 @@ impl CpuSolver {
         self.s.contact.as_ref()
     }
 
+    /// The contact state, to choose its solver's options (see
+    /// [`ContactSet::set_plain_sweeps`]), if the model has contact.
+    pub fn contact_mut(&mut self) -> Option<&mut ContactSet> {
+        self.s.contact.as_mut()
+    }
+
     /// Takes `n` steps, discarding outputs (for benchmarks).
     pub fn run_steps(&mut self, n: u64) {
         let mut events = Vec::new();

@@ -130,6 +130,16 @@ pub struct ContactParams {
     /// 1: the one-workgroup solve's active-set re-checks run as their own dispatches over the
     /// active slots (`recheck_active`, many workgroups), between rounds of `solve_one`.
     pub split: u32,
+    /// ws offsets of the one-workgroup solve's extrapolation (see
+    /// [`crate::contact::extrapolation`]): (lambda, lt) after the last sweep per compacted
+    /// constraint (2 words each), the nodes of the constraints, and their dv after the last sweep
+    /// (2 words each).
+    pub o_lprev: u32,
+    pub o_nlist: u32,
+    pub o_dvp: u32,
+    /// 1: the one-workgroup solve extrapolates between sweeps (0: plain projected Gauss-Seidel;
+    /// the per-colour path never does).
+    pub extrapolate: u32,
 }
 
 /// Mirror of the first part of WGSL `ContactCtl` (the counters the host reads back).
@@ -199,7 +209,7 @@ pub struct GpuSegment {
 /// Size of WGSL `Cons` (scratch only).
 pub const CONS_SIZE: u64 = 64;
 
-const _: () = assert!(std::mem::size_of::<ContactParams>() == 176);
+const _: () = assert!(std::mem::size_of::<ContactParams>() == 192);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuSlot>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuSegment>() == 32);
@@ -370,6 +380,9 @@ fn layout_workspace(p: &mut ContactParams) -> Workspace {
     p.o_aflag = take(ns);
     p.o_aoff = take(ns + 1);
     p.o_alist = take(ns);
+    p.o_lprev = take(2 * ns);
+    p.o_nlist = take(nl);
+    p.o_dvp = take(2 * nl);
     let words = at;
     let mut f = 0u32;
     let mut ftake = |n: u32| {
@@ -450,6 +463,9 @@ pub struct ContactOptions {
     /// [`split_path`]. The same constraints and arithmetic either way: the same bits on
     /// lavapipe; on an H100 the two kernels round apart (1e-9 relative a row).
     pub split: Option<bool>,
+    /// Plain projected Gauss-Seidel sweeps on the one-workgroup path (`true`) instead of the
+    /// extrapolated ones (the default, as on the CPU reference); for comparisons.
+    pub plain_sweeps: bool,
     /// Initial candidate capacity (words); `None`: 4 per slot, at least 1024. A search that
     /// needs more grows the buffer.
     pub candidate_capacity: Option<u32>,
@@ -469,7 +485,8 @@ pub fn split_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
 impl ContactState {
     /// Buffers of `set` (the model's contacts); `alloc` records each buffer for the plan report.
     /// `multi`: the per-colour solve path (else one workgroup); `split`: on the one-workgroup
-    /// path, the re-checks as their own dispatches.
+    /// path, the re-checks as their own dispatches; `extrapolate`: on the one-workgroup path,
+    /// extrapolated sweeps.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
         device: &wgpu::Device,
@@ -480,6 +497,7 @@ impl ContactState {
         row_capacity: u32,
         multi: bool,
         split: bool,
+        extrapolate: bool,
         candidate_capacity: Option<u32>,
         alloc: &mut Alloc<'_>,
     ) -> Result<ContactState> {
@@ -589,6 +607,7 @@ impl ContactState {
             tolerance: (solve::TOLERANCE * t.margin) as f32,
             friction: u32::from(friction),
             split: u32::from(split && !multi),
+            extrapolate: u32::from(extrapolate && !multi),
             ..Default::default()
         };
         let work = layout_workspace(&mut params);
