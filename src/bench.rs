@@ -876,6 +876,9 @@ pub struct ContactTiming {
     pub pile: PileContact,
     /// A Coulomb coefficient for a third variant with friction on every contact and wall.
     pub friction: Option<f64>,
+    /// Plain projected Gauss-Seidel sweeps instead of the extrapolated ones, on both backends
+    /// ([`crate::contact::extrapolation`]): a comparison.
+    pub plain_sweeps: bool,
 }
 
 /// Warm-up steps of a contact row unless asked for more: two, the first search included.
@@ -902,6 +905,8 @@ pub struct ContactRow {
     pub rounds: u32,
     /// Steps each variant ran before the timed ones.
     pub warmup: u64,
+    /// Plain projected Gauss-Seidel sweeps (not extrapolated).
+    pub plain_sweeps: bool,
     /// Wall seconds of the timed steps with contact.
     pub wall_seconds: f64,
     /// Steps per second with contact.
@@ -1074,6 +1079,7 @@ fn contact_row<S: Timed>(
         steps: total,
         rounds,
         warmup,
+        plain_sweeps: timing.plain_sweeps,
         wall_seconds: wall,
         steps_per_second: total as f64 / wall,
         free_seconds: t[1].iter().sum(),
@@ -1132,13 +1138,19 @@ fn contact_build(
 pub fn cpu_contact(which: ContactScene, size: usize, timing: &ContactTiming) -> Result<ContactRow> {
     let (pile, friction) = (timing.pile, timing.friction);
     let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
-    let mut with = CpuSolver::new(model.clone(), plan, schedule);
+    let plain = |mut solver: CpuSolver| {
+        if let Some(c) = solver.contact_mut() {
+            c.set_plain_sweeps(timing.plain_sweeps);
+        }
+        solver
+    };
+    let mut with = plain(CpuSolver::new(model.clone(), plan, schedule));
     let (m, p, s) = contact_build(which, size, false, pile, None)?;
-    let mut without = CpuSolver::new(m, p, s);
+    let mut without = plain(CpuSolver::new(m, p, s));
     let mut rough = match friction {
         Some(mu) => {
             let (m, p, s) = contact_build(which, size, true, pile, Some(mu))?;
-            Some((mu, CpuSolver::new(m, p, s)))
+            Some((mu, plain(CpuSolver::new(m, p, s))))
         }
         None => None,
     };
@@ -1169,13 +1181,19 @@ pub fn gpu_contact(
 ) -> Result<ContactRow> {
     let (pile, friction) = (timing.pile, timing.friction);
     let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
-    let mut with = GpuSolver::new(ctx.clone(), &model, &plan, schedule)?;
+    let options = crate::gpu::contact::ContactOptions {
+        plain_sweeps: timing.plain_sweeps,
+        ..Default::default()
+    };
+    let solver =
+        |m: &Model, p: &Plan, s| GpuSolver::with_options(ctx.clone(), m, p, s, None, options);
+    let mut with = solver(&model, &plan, schedule)?;
     let (m, p, s) = contact_build(which, size, false, pile, None)?;
-    let mut without = GpuSolver::new(ctx.clone(), &m, &p, s)?;
+    let mut without = solver(&m, &p, s)?;
     let mut rough = match friction {
         Some(mu) => {
             let (m, p, s) = contact_build(which, size, true, pile, Some(mu))?;
-            Some((mu, GpuSolver::new(ctx.clone(), &m, &p, s)?))
+            Some((mu, solver(&m, &p, s)?))
         }
         None => None,
     };
@@ -1194,7 +1212,7 @@ pub fn gpu_contact(
 
 /// Formats contact rows as a table.
 /// With `--friction`, two more columns: the steps per second with friction and what friction
-/// adds to a step (microseconds).
+/// adds to a step (microseconds); with `--plain-sweeps`, a line saying so under it.
 pub fn contact_table(rows: &[ContactRow]) -> String {
     let rough = rows.iter().any(|r| r.friction.is_some());
     let mut s = format!(
@@ -1244,6 +1262,9 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
             }
         }
         s.push('\n');
+    }
+    if rows.iter().any(|r| r.plain_sweeps) {
+        s.push_str("(plain projected Gauss-Seidel sweeps, not extrapolated)\n");
     }
     s
 }
@@ -1331,6 +1352,7 @@ mod tests {
             warmup: DEFAULT_WARMUP,
             pile,
             friction,
+            plain_sweeps: false,
         }
     }
 
@@ -1353,6 +1375,28 @@ mod tests {
             warm.sweeps_mean > 0.0,
             "the disks touch the wall after 600 steps"
         );
+    }
+
+    /// `plain_sweeps` reaches the CPU reference's solver: the striker's two-pass constraints take
+    /// more sweeps a step plain than extrapolated, and the row says which it timed.
+    #[test]
+    fn plain_sweeps_reach_the_solver_and_the_row() {
+        let extra = timing(40, 2, PileContact::All, None);
+        let plain = ContactTiming {
+            plain_sweeps: true,
+            ..extra
+        };
+        let e = cpu_contact(ContactScene::Striker, 12, &extra).expect("bench row");
+        let p = cpu_contact(ContactScene::Striker, 12, &plain).expect("bench row");
+        assert_eq!((e.plain_sweeps, p.plain_sweeps), (false, true));
+        assert!(e.sweeps_mean > 0.0, "the striker is in contact");
+        assert!(
+            p.sweeps_mean > e.sweeps_mean,
+            "{} plain against {} extrapolated",
+            p.sweeps_mean,
+            e.sweeps_mean
+        );
+        assert!(contact_table(&[p]).contains("plain projected Gauss-Seidel"));
     }
 
     #[test]

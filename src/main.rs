@@ -153,6 +153,10 @@ enum Command {
         /// about 440 steps).
         #[arg(long, default_value_t = ricochet::bench::DEFAULT_WARMUP)]
         warmup: u64,
+        /// Time the contact scenes with plain projected Gauss-Seidel sweeps instead of the
+        /// extrapolated ones (both backends): a comparison.
+        #[arg(long)]
+        plain_sweeps: bool,
         /// Also write the table(s) as JSON: the block rows as an array; with a contact scene,
         /// an object {"block": [...], "contact": [...]}.
         #[arg(long)]
@@ -312,6 +316,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
             steps,
             rounds,
             warmup,
+            plain_sweeps,
             json,
             adapter,
         } => {
@@ -432,6 +437,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         warmup,
                         pile,
                         friction,
+                        plain_sweeps,
                     };
                     if run_cpu {
                         let row = ricochet::bench::cpu_contact(which, size, &timing);
