@@ -26,14 +26,15 @@ pub const EXTRAPOLATION: f64 = 0.9;
 /// count restarts when a sweep changes a gap by more than the sweep before it (an adaptive
 /// restart, as O'Donoghue and Candes restart accelerated gradient methods). The two-pass
 /// constraints of two meshes make the Delassus operator nearly singular along the interface (a
-/// smooth push of one pass against the other moves no node), and plain sweeps reduce those
-/// modes by about 1 % a sweep.
+/// smooth push of one pass against the other nearly cancels on the nodes), and plain sweeps
+/// reduce those modes by about 1 % a sweep.
 ///
 /// Measured on the striker bench scene, CPU reference, the whole run at the device's tolerance
-/// (1e-4 of the margin), mean / max sweeps a step: 10^4 elements 51 / 500 plain, 19 / 126 with
-/// Nesterov's factor (k - 1) / (k + 2), 15 / 59 with this one; 10^5 elements (80 x 80 striker)
-/// 30 / 218 Nesterov, 19 / 75 this; 141 x 141: 33 / 158 Nesterov, 20 / 79 this (factors 0.8,
-/// 0.85 and 0.95: 24, 22 and 23 there). BENCHMARKS.md, session 17.
+/// (1e-4 of the margin), mean / max sweeps a step: 41 x 41 striker cells (10^4 elements) 19 / 126
+/// with Nesterov's factor (k - 1) / (k + 2), 15 / 59 with this one (the device's plain sweeps:
+/// 51 / 500); 80 x 80 (38 400 elements) 30 / 218 Nesterov, 19 / 75 this; 141 x 141 (1.2e5
+/// elements) 33 / 158 Nesterov, 20 / 79 this (factors 0.8, 0.85 and 0.95: 24, 22 and 23 there).
+/// BENCHMARKS.md, session 17.
 pub fn extrapolation(k: u32) -> f64 {
     if k < 2 {
         0.0
