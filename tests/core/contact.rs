@@ -10,6 +10,8 @@ use ricochet::step::Sample;
 
 use crate::common::*;
 
+#[path = "../shared/compare.rs"]
+mod compare;
 #[path = "../shared/contact_scenes.rs"]
 mod scenes;
 use scenes::*;
@@ -577,24 +579,8 @@ fn extrapolated_sweeps_agree_with_plain_ones_and_converge_in_fewer() {
     };
     let (rp, up) = go(true);
     let (re, ue) = go(false);
-    let du = up
-        .iter()
-        .zip(&ue)
-        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-        .fold(0.0, f64::max);
-    let umax = up.iter().map(|a| a[0].hypot(a[1])).fold(0.0, f64::max);
-    let ke0 = rp.samples[0].0.kinetic;
-    let de = rp
-        .samples
-        .iter()
-        .zip(&re.samples)
-        .map(|((a, _), (b, _))| {
-            (a.contact - b.contact)
-                .abs()
-                .max((a.kinetic - b.kinetic).abs())
-                .max((a.internal - b.internal).abs())
-        })
-        .fold(0.0, f64::max);
+    let (du, umax) = compare::displacement_difference(&up, &ue);
+    let (de, ke0) = compare::energy_difference(&rp, &re);
     let (sp, se) = (&rp.summary, &re.summary);
     println!(
         "striker 24: sweeps mean {:.1} max {} unconverged {} plain; {:.1} max {} unconverged {} \

@@ -7,6 +7,9 @@ use ricochet::gpu::contact::ContactOptions;
 
 use super::stress::penetration::{interpenetration, self_penetration};
 
+#[path = "../shared/compare.rs"]
+mod compare;
+
 fn asset_path(rel: &str) -> String {
     std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -261,12 +264,7 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
         let (r2, _, u2, _) = run_gpu_with(&ctx, &text, &format!("{name}-split"), with(true));
         let (r3, _, u3, _) = run_gpu_with(&ctx, &text, &format!("{name}-split2"), with(true));
         let bits = |u: &[[f64; 2]]| u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>();
-        let du = u1
-            .iter()
-            .zip(&u2)
-            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-            .fold(0.0, f64::max);
-        let umax = u1.iter().map(|a| a[0].hypot(a[1])).fold(0.0, f64::max);
+        let (du, umax) = compare::displacement_difference(&u1, &u2);
         let ke0 = r1.samples[0].0.kinetic;
         let de = r1
             .samples
@@ -343,24 +341,8 @@ fn gpu_extrapolated_sweeps_agree_with_plain_ones_in_fewer_sweeps() {
         let (re, _, ue, _) = run_gpu_with(&ctx, &text, &format!("{name}-extra"), with(false));
         let (re2, _, ue2, _) = run_gpu_with(&ctx, &text, &format!("{name}-extra2"), with(false));
         let bits = |u: &[[f64; 2]]| u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>();
-        let du = up
-            .iter()
-            .zip(&ue)
-            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-            .fold(0.0, f64::max);
-        let umax = up.iter().map(|a| a[0].hypot(a[1])).fold(0.0, f64::max);
-        let ke0 = rp.samples[0].0.kinetic;
-        let de = rp
-            .samples
-            .iter()
-            .zip(&re.samples)
-            .map(|((a, _), (b, _))| {
-                (a.contact - b.contact)
-                    .abs()
-                    .max((a.kinetic - b.kinetic).abs())
-                    .max((a.internal - b.internal).abs())
-            })
-            .fold(0.0, f64::max);
+        let (du, umax) = compare::displacement_difference(&up, &ue);
+        let (de, ke0) = compare::energy_difference(&rp, &re);
         let (sp, se) = (&rp.summary, &re.summary);
         // (The pile only: the striker's 22 000 nodes against its 21 600 elements would take
         // longer than the runs.)
