@@ -8,8 +8,9 @@
 // `fws` (vec4<f32>) at the offsets of ContactParams.
 
 const CG: u32 = 64u;                  // threads per workgroup of the per-item contact kernels
-const RG: u32 = 256u;
-// Threads of the one-workgroup kernels (scans, one-group solve): 64 on CPU adapters (src/gpu/shader.rs).
+// Threads of the one-workgroup contact kernels (plan, scans, the one-workgroup solve): 256 on
+// GPUs, 8 on CPU adapters (src/gpu/shader.rs Features::contact_group).
+const SG: u32 = 256u;
 const KIND_NONE: u32 = 0u;
 const KIND_LAGRANGE: u32 = 1u;
 const KIND_PENALTY: u32 = 2u;

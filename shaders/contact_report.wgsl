@@ -1,13 +1,18 @@
 // The end of the contact step (CPU reference: the end of crate::contact::ContactSet::apply and its
 // reports): corrected velocities and u_{n+1}, the impulses' work, and per interface the impulse on
 // its first body, the active slaves and the largest penetration. Every sum is a fixed-order
-// reduction (workgroup trees over lanes that each take a fixed stride): the same bits on every run.
+// reduction (per workgroup by lane 0 in lane order, then workgroup trees over lanes that each take
+// a fixed stride): the same bits on every run. Each barrier costs lavapipe a coroutine switch per
+// lane group, so the per-item kernels have one barrier each and the one-workgroup `report_end`
+// runs SG lanes (8 on CPU adapters).
 
 @group(0) @binding(13) var<storage, read_write> ws: array<u32>;
 @group(0) @binding(14) var<storage, read_write> grow: array<u32>;
 
 var<workgroup> sh_f: array<vec4<f32>, CG>;
 var<workgroup> sh_r: array<vec4<f32>, CG>;
+var<workgroup> sh_e: array<vec4<f32>, SG>;   // report_end's trees
+var<workgroup> sh_er: array<vec4<f32>, SG>;
 var<workgroup> sh_ni: u32;
 
 // First word of interface f in a history row: after the contact energy (and with friction the
@@ -21,17 +26,15 @@ fn hist_word(f: u32) -> u32 {
 
 // 4. Corrected velocities, u_{n+1}, the impulses' work J (v^{n-1/2} + v^{n+1/2}) / 2 (free
 //    directions only: on a constrained one the inverse mass is 0) and kinetic sample sources;
-//    the work per workgroup into fws[f_wp + workgroup].
+//    the work per workgroup (lane 0 sums its lanes in order) into fws[f_wp + workgroup].
 @compute @workgroup_size(CG)
 fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>,
           @builtin(workgroup_id) wid: vec3<u32>) {
     let i = gid.x;
     let l = lid.x;
-    if (!running_uniform(l)) {
-        return;
-    }
+    let running = contact_running();
     var work = vec4<f32>(0.0);
-    if (i < cc.p.n_local) {
+    if (running && i < cc.p.n_local) {
         let moving = (ctrl.flags & FLAG_END) == 0u;
         let sample = (ctrl.flags & FLAG_SAMPLE) != 0u;
         let dt = ctrl.dt_next;
@@ -73,14 +76,12 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocati
     }
     sh_f[l] = work;
     workgroupBarrier();
-    for (var h = CG / 2u; h > 0u; h >>= 1u) {
-        if (l < h) {
-            sh_f[l] += sh_f[l + h];
+    if (l == 0u && running) {
+        var t = vec4<f32>(0.0);
+        for (var h = 0u; h < CG; h++) {
+            t += sh_f[h];
         }
-        workgroupBarrier();
-    }
-    if (l == 0u) {
-        fws[cc.p.f_wp + wid.x] = sh_f[0];
+        fws[cc.p.f_wp + wid.x] = t;
     }
 }
 
@@ -159,12 +160,12 @@ fn active_begin(f: u32) -> u32 {
 fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
     let j = gid.x;
     let l = lid.x;
-    if (!running_uniform(l)) {
-        return;
-    }
+    // (No early return before the barrier: the kernel runs on when contact is not running,
+    // doing nothing.)
+    let running = contact_running();
     let dt = ctrl.dt_next;
     let friction = cc.p.friction != 0u;
-    let na = active_count();
+    let na = select(0u, active_count(), running);
     if (j < na) {
         let k = active_slot(j);
         sh_f[l] = slot_report(k, dt);
@@ -227,11 +228,11 @@ fn acc_set(f: u32, a: vec4<f32>) {
 }
 
 // 5b. Per interface (its slots are contiguous, and so are its active ones: active_begin(f) ..
-//     active_begin(f + 1) in the active list), the partials of its runs, lane l taking runs l, l + CG, ... in order, then the tree (sums, and
+//     active_begin(f + 1) in the active list), the partials of its runs, lane l taking runs l, l + SG, ... in order, then the tree (sums, and
 //     the largest penetration); the history row on sample steps; the work (the finish partials
 //     the same way); sweep counts. The whole workgroup works on each interface in turn, so that
-//     an interface of many slots costs its slots / CG^2 loads per lane, not its slots / CG.
-@compute @workgroup_size(CG)
+//     an interface of many slots costs its slots / (CG SG) loads per lane, not its slots / CG.
+@compute @workgroup_size(SG)
 fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
     if (!running_uniform(l)) {
@@ -256,7 +257,7 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
             // Runs start at lo and at every chunk boundary after it, up to hi.
             let c0 = lo / CG;
             let runs = (hi - 1u) / CG - c0 + 1u;
-            for (var j = l; j < runs; j += CG) {
+            for (var j = l; j < runs; j += SG) {
                 let at = select((c0 + j) * CG, lo, j == 0u);
                 let p = fws[cc.p.f_rp + at];
                 r = vec4<f32>(r.xyz + p.xyz, max(r.w, p.w));
@@ -265,21 +266,21 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
                 }
             }
         }
-        sh_f[l] = r;
-        sh_r[l] = rf;
+        sh_e[l] = r;
+        sh_er[l] = rf;
         workgroupBarrier();
-        for (var h = CG / 2u; h > 0u; h >>= 1u) {
+        for (var h = SG / 2u; h > 0u; h >>= 1u) {
             if (l < h) {
-                let a = sh_f[l];
-                let b = sh_f[l + h];
-                sh_f[l] = vec4<f32>(a.xyz + b.xyz, max(a.w, b.w));
-                sh_r[l] += sh_r[l + h];
+                let a = sh_e[l];
+                let b = sh_e[l + h];
+                sh_e[l] = vec4<f32>(a.xyz + b.xyz, max(a.w, b.w));
+                sh_er[l] += sh_er[l + h];
             }
             workgroupBarrier();
         }
         if (l == 0u) {
-            let t = sh_f[0];
-            let tf = sh_r[0];
+            let t = sh_e[0];
+            let tf = sh_er[0];
             fwork += tf.yz;
             // The friction impulse along the tangents also in the force (x, y), and its
             // scalar sum in a.w.
@@ -306,24 +307,24 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
         }
         workgroupBarrier();
     }
-    // The impulses' work: the finish partials, lane l taking workgroups l, l + CG, ... in order.
+    // The impulses' work: the finish partials, lane l taking workgroups l, l + SG, ... in order.
     var part = vec4<f32>(0.0);
     let ng = (cc.p.n_local + CG - 1u) / CG;
-    for (var g = l; g < ng; g += CG) {
+    for (var g = l; g < ng; g += SG) {
         part += fws[cc.p.f_wp + g];
     }
-    sh_f[l] = part;
+    sh_e[l] = part;
     workgroupBarrier();
-    for (var h = CG / 2u; h > 0u; h >>= 1u) {
+    for (var h = SG / 2u; h > 0u; h >>= 1u) {
         if (l < h) {
-            sh_f[l] += sh_f[l + h];
+            sh_e[l] += sh_e[l + h];
         }
         workgroupBarrier();
     }
     if (l != 0u) {
         return;
     }
-    let total = sh_f[0];
+    let total = sh_e[0];
     var w = acc_get(cc.p.n_ifaces);
     // The running sums in compensated (Kahan) form, their residuals in the next accumulator: a
     // step adds about 1e-4 of the sum over 10^4 steps and more, the same way every step, and plain

@@ -15,7 +15,7 @@
 @group(0) @binding(14) var<storage, read_write> grow: array<atomic<u32>>;
 @group(1) @binding(0) var<storage, read_write> ind: array<u32>;
 
-var<workgroup> sh_scan: array<u32, RG>;
+var<workgroup> sh_scan: array<u32, SG>;
 var<workgroup> sh_u: u32;
 
 fn wsl(i: u32) -> u32 {
@@ -215,7 +215,7 @@ fn seg_count(@builtin(global_invocation_id) gid: vec3<u32>) {
 // Exclusive scan of n words at `src` into `dst` (n + 1 words) and a copy at `cur` (if not NONE),
 // in one workgroup, in a fixed order; returns the total.
 fn scan(src: u32, dst: u32, cur: u32, n: u32, l: u32) -> u32 {
-    let per = (n + RG - 1u) / RG;
+    let per = (n + SG - 1u) / SG;
     let begin = min(l * per, n);
     let end = min(begin + per, n);
     var sum = 0u;
@@ -226,7 +226,7 @@ fn scan(src: u32, dst: u32, cur: u32, n: u32, l: u32) -> u32 {
     workgroupBarrier();
     if (l == 0u) {
         var acc = 0u;
-        for (var t = 0u; t < RG; t++) {
+        for (var t = 0u; t < SG; t++) {
             let x = sh_scan[t];
             sh_scan[t] = acc;
             acc += x;
@@ -250,7 +250,7 @@ fn scan(src: u32, dst: u32, cur: u32, n: u32, l: u32) -> u32 {
     return total;
 }
 
-@compute @workgroup_size(RG)
+@compute @workgroup_size(SG)
 fn scan_buckets(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (!running_uniform(lid.x)) {
         return;
@@ -391,7 +391,7 @@ fn slot_count(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 // 2e. Candidate offsets and the active slots' offsets; a search that does not fit stops the step for the host to grow the buffer.
-@compute @workgroup_size(RG)
+@compute @workgroup_size(SG)
 fn scan_slots(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
     if (!running_uniform(l)) {
@@ -463,7 +463,7 @@ fn adj_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
-@compute @workgroup_size(RG)
+@compute @workgroup_size(SG)
 fn scan_nodes(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (!running_uniform(lid.x)) {
         return;
@@ -572,7 +572,7 @@ fn list_count(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 // Colour offsets and the per-colour dispatch sizes (indirect entries 14 + c); a direct dispatch
 // (it writes the indirect sizes), idle when no search ran this step.
-@compute @workgroup_size(RG)
+@compute @workgroup_size(SG)
 fn scan_lists(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
     if (l == 0u) {

@@ -15,12 +15,12 @@
 
 const ACTIVE_SET_ROUNDS: u32 = 4u;    // crate::contact::ACTIVE_SET_ROUNDS
 
-var<workgroup> sh_m: array<f32, RG>;
+var<workgroup> sh_m: array<f32, SG>;
 var<workgroup> sh_w: u32;
 var<workgroup> sh_nc: u32;
 var<workgroup> sh_off: array<u32, 34>;   // colour offsets of the compacted slots (SERIAL + 2)
 var<workgroup> sh_max: atomic<u32>;
-var<workgroup> sh_pre: array<u32, RG>;
+var<workgroup> sh_pre: array<u32, SG>;
 var<workgroup> sh_split: u32;
 var<workgroup> sh_nn: u32;         // nodes of the compacted constraints (ws[o_nlist..])
 var<workgroup> sh_change: u32;     // f32 bits of the last sweep's largest change
@@ -33,7 +33,7 @@ var<workgroup> sh_change: u32;     // f32 bits of the last sweep's largest chang
 fn any_positive(l: u32, x: f32) -> bool {
     sh_m[l] = x;
     workgroupBarrier();
-    for (var h = RG / 2u; h > 0u; h >>= 1u) {
+    for (var h = SG / 2u; h > 0u; h >>= 1u) {
         if (l < h) {
             sh_m[l] = max(sh_m[l], sh_m[l + h]);
         }
@@ -90,7 +90,7 @@ fn compact(l: u32) {
     // The Lagrange slots in slot order into ws[o_color..]: each invocation a contiguous chunk
     // of the active slots, offsets by a prefix over the invocations.
     let n = active_count();
-    let chunk = (n + RG - 1u) / RG;
+    let chunk = (n + SG - 1u) / SG;
     let begin = min(l * chunk, n);
     let end = min(begin + chunk, n);
     var mine = 0u;
@@ -103,7 +103,7 @@ fn compact(l: u32) {
     workgroupBarrier();
     if (l == 0u) {
         var acc = 0u;
-        for (var t = 0u; t < RG; t++) {
+        for (var t = 0u; t < SG; t++) {
             let x = sh_pre[t];
             sh_pre[t] = acc;
             acc += x;
@@ -184,7 +184,7 @@ fn extrapolation(k: u32) -> f32 {
 // values reached are kept for the next call. beta = 0 only keeps them.
 fn extrapolate(l: u32, beta: f32) {
     let na = sh_off[SERIAL + 1u];
-    for (var q = l; q < na; q += RG) {
+    for (var q = l; q < na; q += SG) {
         let k = ws[cc.p.o_act + q];
         let now = vec2<f32>(cons[k].lambda, cons[k].lt);
         let at = cc.p.o_lprev + 2u * q;
@@ -197,7 +197,7 @@ fn extrapolate(l: u32, beta: f32) {
         ws[at + 1u] = bitcast<u32>(now.y);
     }
     let nn = sh_nn;
-    for (var j = l; j < nn; j += RG) {
+    for (var j = l; j < nn; j += SG) {
         let i = ws[cc.p.o_nlist + j];
         let now = dv(i);
         let at = cc.p.o_dvp + 2u * j;
@@ -248,7 +248,7 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
         var change = 0.0;
         for (var col = 0u; col < nc; col++) {
             let end = sh_off[col + 1u];
-            for (var q = sh_off[col] + l; q < end; q += RG) {
+            for (var q = sh_off[col] + l; q < end; q += SG) {
                 change = max(change, pgs_update(ws[cc.p.o_act + q], dt, inv_scale));
             }
             storageBarrier();
@@ -313,7 +313,7 @@ fn split_round_runs(r: u32) -> bool {
 // The one-workgroup solve. Split (cc.p.split), this dispatch is round r = round_index.x of it:
 // round 0 the first sweeps, round r > 0 the sweeps after `recheck_active` r - 1 when that added
 // constraints; unsplit, every round here, each re-check over the active slots in this workgroup.
-@compute @workgroup_size(RG)
+@compute @workgroup_size(SG)
 fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
     if (!running_uniform(l)) {
@@ -335,7 +335,7 @@ fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     for (var round = 0u; round < ACTIVE_SET_ROUNDS && !split; round++) {
         var added = 0.0;
         let na = active_count();
-        for (var j = l; j < na; j += RG) {
+        for (var j = l; j < na; j += SG) {
             if (recheck_slot(active_slot(j), dt, dtn, inv_scale)) {
                 added = 1.0;
             }

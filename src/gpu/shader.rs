@@ -24,6 +24,10 @@ pub struct Features {
     /// Threads per workgroup of the reductions and control kernels (WGSL `RG`): 256 on GPUs,
     /// 64 on CPU adapters such as lavapipe, where each barrier costs a coroutine switch per lane group.
     pub reduce_group: u32,
+    /// Threads of the one-workgroup contact kernels (WGSL `SG`: the search's scans, the
+    /// one-workgroup Lagrange solve, the reports' end): 256 on GPUs, 8 on CPU adapters
+    /// ([`crate::gpu::contact::one_group`]).
+    pub contact_group: u32,
 }
 
 impl Default for Features {
@@ -35,6 +39,7 @@ impl Default for Features {
             plastic: false,
             axisymmetric: false,
             reduce_group: 256,
+            contact_group: 256,
         }
     }
 }
@@ -58,7 +63,7 @@ impl Features {
             for fields in [false, true] {
                 for loads in [false, true] {
                     for (plastic, axisymmetric) in [(false, false), (true, true)] {
-                        for reduce_group in [64, 256] {
+                        for (reduce_group, contact_group) in [(64, 8), (256, 256)] {
                             v.push(Features {
                                 dissipation,
                                 fields,
@@ -66,6 +71,7 @@ impl Features {
                                 plastic,
                                 axisymmetric,
                                 reduce_group,
+                                contact_group,
                             });
                         }
                     }
@@ -106,6 +112,10 @@ pub fn source(kernel: &str, features: Features) -> String {
         if *keep.last().unwrap_or(&true) {
             if t == "const RG: u32 = 256u;" {
                 out.push_str(&format!("const RG: u32 = {}u;\n", features.reduce_group));
+                continue;
+            }
+            if t == "const SG: u32 = 256u;" {
+                out.push_str(&format!("const SG: u32 = {}u;\n", features.contact_group));
                 continue;
             }
             out.push_str(line);

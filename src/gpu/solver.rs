@@ -116,10 +116,11 @@ impl GpuSolver {
     }
 
     /// As [`GpuSolver::with_reductions`], also choosing the contact stage's options (solve path,
-    /// initial candidate capacity; see [`ContactOptions`]).
+    /// initial candidate capacity, one-workgroup size; see [`ContactOptions`]).
     ///
     /// # Errors
-    /// [`Error::Gpu`] when the model does not fit.
+    /// [`Error::Gpu`] when the model does not fit, or `contact.group` is not a power of two
+    /// from 8 to 256.
     pub fn with_options(
         ctx: Arc<GpuContext>,
         model: &Model,
@@ -128,6 +129,7 @@ impl GpuSolver {
         fused: Option<bool>,
         contact: ContactOptions,
     ) -> Result<Self> {
+        let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -139,12 +141,18 @@ impl GpuSolver {
                 .bodies
                 .iter()
                 .any(|b| b.params.formulation == crate::scene::Formulation::Axisymmetric),
-            reduce_group: if ctx.info.device_type == wgpu::DeviceType::Cpu {
-                64
-            } else {
-                256
-            },
+            reduce_group: if cpu_adapter { 64 } else { 256 },
+            contact_group: contact
+                .group
+                .unwrap_or_else(|| super::contact::one_group(ctx.info.device_type)),
         };
+        if !(8..=256).contains(&features.contact_group) || !features.contact_group.is_power_of_two()
+        {
+            return Err(Error::Gpu(format!(
+                "contact group of {} threads: a power of two from 8 to 256",
+                features.contact_group
+            )));
+        }
         let device = &ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let kernels = Kernels::new(

@@ -315,6 +315,97 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
     }
 }
 
+/// The one-workgroup contact kernels (the search's scans, the solve, the reports' end) at 8, 64
+/// and 256 threads: 8 is the CPU adapters' size and 256 the GPUs' (`contact::one_group`), so this
+/// runs the GPUs' size on lavapipe too. The scans sum integers and a colour's constraints share no
+/// node, so every size gives the same node bits on lavapipe (a hardware adapter may contract
+/// multiply-adds differently per kernel: held to round-off there); only the reports' float sums
+/// change order, so the contact energy and forces agree to round-off. Every size gives the same
+/// bits on a second run, and a size that is no power of two from 8 to 256 is refused.
+#[test]
+fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let pile = asset_path("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
+    let striker = asset_path("stress/striker_plate_gpu_energy.toml");
+    let with = |group: u32| ContactOptions {
+        multi: Some(false),
+        group: Some(group),
+        ..ContactOptions::default()
+    };
+    for (name, text) in [("pile", pile), ("striker", striker)] {
+        let runs: Vec<_> = [8, 64, 256, 256]
+            .iter()
+            .enumerate()
+            .map(|(i, &g)| run_gpu_with(&ctx, &text, &format!("{name}-group{g}-{i}"), with(g)))
+            .collect();
+        let bits = |u: &[[f64; 2]]| u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>();
+        let (r8, _, u8, _) = &runs[0];
+        assert!(r8.summary.contact_sweeps_max > 0, "{name}: the solve ran");
+        let ke0 = r8.samples[0].0.kinetic;
+        for (r, _, u, _) in &runs[1..3] {
+            let (du, umax) = compare::displacement_difference(u8, u);
+            let de = r8
+                .samples
+                .iter()
+                .zip(&r.samples)
+                .map(|((a, _), (b, _))| (a.contact - b.contact).abs())
+                .fold(0.0, f64::max);
+            println!(
+                "{name}: 8 against more threads: |du| {du:.2e} of {umax:.2e} m, contact energy \
+                 {de:.2e} of {ke0:.2e} J, sweeps {:.2} and {:.2}",
+                r8.summary.contact_sweeps_mean, r.summary.contact_sweeps_mean
+            );
+            assert_eq!(r8.samples.len(), r.samples.len());
+            if ctx.is_software() {
+                assert_eq!(bits(u8), bits(u), "{name}: node bits differ by group size");
+                assert_eq!(
+                    r8.summary.contact_sweeps_mean.to_bits(),
+                    r.summary.contact_sweeps_mean.to_bits(),
+                    "{name}: sweeps differ"
+                );
+            } else {
+                assert!(
+                    du <= 1e-5 * umax,
+                    "{name}: displacements differ by {du:e} m"
+                );
+            }
+            assert!(
+                de <= 1e-5 * ke0,
+                "{name}: contact energies differ by {de:e} J"
+            );
+        }
+        assert_eq!(
+            history_bits(&runs[2].0),
+            history_bits(&runs[3].0),
+            "{name}: two runs at 256 threads differ"
+        );
+        assert_eq!(
+            bits(&runs[2].2),
+            bits(&runs[3].2),
+            "{name}: two runs differ"
+        );
+    }
+    let (scene, model, plan) = load(&asset_path("pile.toml"), "pile-group-bad");
+    for bad in [4, 96, 512] {
+        let e = GpuSolver::with_options(
+            ctx.clone(),
+            &model,
+            &plan,
+            schedule(&scene),
+            None,
+            with(bad),
+        )
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+        assert!(
+            e.contains(&format!("contact group of {bad} threads")),
+            "{bad} threads: {e}"
+        );
+    }
+}
+
 /// The one-workgroup solve's extrapolated sweeps (the default; `contact::extrapolation`) against
 /// plain projected Gauss-Seidel, on the striker into its plate (two-pass Lagrange constraints on
 /// two meshes, whose nearly redundant pairs plain sweeps reduce by about 1 % a sweep) and on the

@@ -469,6 +469,23 @@ pub struct ContactOptions {
     /// Initial candidate capacity (words); `None`: 4 per slot, at least 1024. A search that
     /// needs more grows the buffer.
     pub candidate_capacity: Option<u32>,
+    /// Threads of the one-workgroup contact kernels (the search's scans, the one-workgroup
+    /// solve, the reports' end), a power of two from 8 to 256; `None`: [`one_group`]. Every
+    /// size gives the same node bits (their sums are of integers, or per constraint within a
+    /// colour); only the reports' float sums change order.
+    pub group: Option<u32>,
+}
+
+/// Threads of the one-workgroup contact kernels on an adapter of `device_type`: 256 on GPUs, 8
+/// on CPU adapters. On lavapipe one workgroup runs on one core in lane groups of 8, and each
+/// barrier of a larger group switches between them: the 10^5-element striker's solve took
+/// 1.78 ms a step with 64 threads, 1.24 ms with 8 (BENCHMARKS.md, session 18).
+pub fn one_group(device_type: wgpu::DeviceType) -> u32 {
+    if device_type == wgpu::DeviceType::Cpu {
+        8
+    } else {
+        256
+    }
 }
 
 /// Whether the per-colour path is used for `slots` slots on an adapter of `device_type`.
