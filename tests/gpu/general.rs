@@ -320,7 +320,7 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
 /// runs the GPUs' size on lavapipe too. The scans sum integers and a colour's constraints share no
 /// node, so every size gives the same node bits on lavapipe (a hardware adapter may contract
 /// multiply-adds differently per kernel: held to round-off there); only the reports' float sums
-/// change order, so the contact energy and forces agree to round-off. Every size gives the same
+/// change order, so the energies agree to round-off. Every size gives the same
 /// bits on a second run, and a size that is no power of two from 8 to 256 is refused.
 #[test]
 fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
@@ -342,17 +342,11 @@ fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
         let bits = |u: &[[f64; 2]]| u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>();
         let (r8, _, u8, _) = &runs[0];
         assert!(r8.summary.contact_sweeps_max > 0, "{name}: the solve ran");
-        let ke0 = r8.samples[0].0.kinetic;
         for (r, _, u, _) in &runs[1..3] {
             let (du, umax) = compare::displacement_difference(u8, u);
-            let de = r8
-                .samples
-                .iter()
-                .zip(&r.samples)
-                .map(|((a, _), (b, _))| (a.contact - b.contact).abs())
-                .fold(0.0, f64::max);
+            let (de, ke0) = compare::energy_difference(r8, r);
             println!(
-                "{name}: 8 against more threads: |du| {du:.2e} of {umax:.2e} m, contact energy \
+                "{name}: 8 against more threads: |du| {du:.2e} of {umax:.2e} m, energies \
                  {de:.2e} of {ke0:.2e} J, sweeps {:.2} and {:.2}",
                 r8.summary.contact_sweeps_mean, r.summary.contact_sweeps_mean
             );
@@ -370,10 +364,7 @@ fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
                     "{name}: displacements differ by {du:e} m"
                 );
             }
-            assert!(
-                de <= 1e-5 * ke0,
-                "{name}: contact energies differ by {de:e} J"
-            );
+            assert!(de <= 1e-5 * ke0, "{name}: energies differ by {de:e} J");
         }
         assert_eq!(
             history_bits(&runs[2].0),
