@@ -66,6 +66,11 @@ fn run_gpu_with(
     (r, model, u, grows)
 }
 
+/// The bits of every node's displacement, for comparing two runs bit for bit.
+fn displacement_bits(u: &[[f64; 2]]) -> Vec<[u64; 2]> {
+    u.iter().map(|x| x.map(f64::to_bits)).collect()
+}
+
 fn history_bits(r: &ricochet::run::RunResult) -> Vec<u64> {
     r.samples
         .iter()
@@ -116,10 +121,7 @@ fn gpu_pile_in_one_general_contact_keeps_the_energy_no_node_inside_and_the_same_
     // f32: a node may sit within round-off of the other surface.
     assert!(deepest < 1e-4 * h, "{deepest:e} m inside");
     assert_eq!(history_bits(&r), history_bits(&r2), "two GPU runs differ");
-    assert_eq!(
-        u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>(),
-        u2.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>()
-    );
+    assert_eq!(displacement_bits(&u), displacement_bits(&u2));
 }
 
 #[test]
@@ -263,20 +265,10 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
         let (r1, _, u1, _) = run_gpu_with(&ctx, &text, &format!("{name}-inside"), with(false));
         let (r2, _, u2, _) = run_gpu_with(&ctx, &text, &format!("{name}-split"), with(true));
         let (r3, _, u3, _) = run_gpu_with(&ctx, &text, &format!("{name}-split2"), with(true));
-        let bits = |u: &[[f64; 2]]| u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>();
         let (du, umax) = compare::displacement_difference(&u1, &u2);
-        let ke0 = r1.samples[0].0.kinetic;
-        let de = r1
-            .samples
-            .iter()
-            .zip(&r2.samples)
-            .map(|((a, _), (b, _))| {
-                (a.contact - b.contact)
-                    .abs()
-                    .max((a.kinetic - b.kinetic).abs())
-            })
-            .fold(0.0, f64::max);
-        let same = history_bits(&r1) == history_bits(&r2) && bits(&u1) == bits(&u2);
+        let (de, ke0) = compare::energy_difference(&r1, &r2);
+        let same = history_bits(&r1) == history_bits(&r2)
+            && displacement_bits(&u1) == displacement_bits(&u2);
         println!(
             "{name}: sweeps mean {:.2} max {} (inside the workgroup) and {:.2} max {} (split), \
              {} steps; split against inside: same bits {same}, |du| {du:.2e} of {umax:.2e} m, \
@@ -293,7 +285,11 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
             history_bits(&r3),
             "{name}: two split runs differ"
         );
-        assert_eq!(bits(&u2), bits(&u3), "{name}: two split runs differ");
+        assert_eq!(
+            displacement_bits(&u2),
+            displacement_bits(&u3),
+            "{name}: two split runs differ"
+        );
         assert_eq!(r1.samples.len(), r2.samples.len());
         if ctx.is_software() {
             assert!(
@@ -339,7 +335,6 @@ fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
             .enumerate()
             .map(|(i, &g)| run_gpu_with(&ctx, &text, &format!("{name}-group{g}-{i}"), with(g)))
             .collect();
-        let bits = |u: &[[f64; 2]]| u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>();
         let (r8, _, u8, _) = &runs[0];
         assert!(r8.summary.contact_sweeps_max > 0, "{name}: the solve ran");
         for (r, _, u, _) in &runs[1..3] {
@@ -352,7 +347,11 @@ fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
             );
             assert_eq!(r8.samples.len(), r.samples.len());
             if ctx.is_software() {
-                assert_eq!(bits(u8), bits(u), "{name}: node bits differ by group size");
+                assert_eq!(
+                    displacement_bits(u8),
+                    displacement_bits(u),
+                    "{name}: node bits differ by group size"
+                );
                 assert_eq!(
                     r8.summary.contact_sweeps_mean.to_bits(),
                     r.summary.contact_sweeps_mean.to_bits(),
@@ -372,8 +371,8 @@ fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
             "{name}: two runs at 256 threads differ"
         );
         assert_eq!(
-            bits(&runs[2].2),
-            bits(&runs[3].2),
+            displacement_bits(&runs[2].2),
+            displacement_bits(&runs[3].2),
             "{name}: two runs differ"
         );
     }
@@ -422,7 +421,6 @@ fn gpu_extrapolated_sweeps_agree_with_plain_ones_in_fewer_sweeps() {
         let (rp, model, up, _) = run_gpu_with(&ctx, &text, &format!("{name}-plain"), with(true));
         let (re, _, ue, _) = run_gpu_with(&ctx, &text, &format!("{name}-extra"), with(false));
         let (re2, _, ue2, _) = run_gpu_with(&ctx, &text, &format!("{name}-extra2"), with(false));
-        let bits = |u: &[[f64; 2]]| u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>();
         let (du, umax) = compare::displacement_difference(&up, &ue);
         let (de, ke0) = compare::energy_difference(&rp, &re);
         let (sp, se) = (&rp.summary, &re.summary);
@@ -453,7 +451,11 @@ fn gpu_extrapolated_sweeps_agree_with_plain_ones_in_fewer_sweeps() {
             history_bits(&re2),
             "{name}: two runs differ"
         );
-        assert_eq!(bits(&ue), bits(&ue2), "{name}: two runs differ");
+        assert_eq!(
+            displacement_bits(&ue),
+            displacement_bits(&ue2),
+            "{name}: two runs differ"
+        );
         assert_eq!(rp.samples.len(), re.samples.len());
         assert!(
             du <= 1e-4 * umax,
@@ -679,10 +681,7 @@ fn gpu_and_cpu_pile_of_a_hundred_disks_collide_without_penetration_and_with_the_
     assert!(gpu_in < 1e-4 * h, "{gpu_in:e} m inside");
     assert!(cpu_in < 1e-6 * h, "{cpu_in:e} m inside");
     assert_eq!(history_bits(&r), history_bits(&r2), "two GPU runs differ");
-    assert_eq!(
-        u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>(),
-        u2.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>()
-    );
+    assert_eq!(displacement_bits(&u), displacement_bits(&u2));
 }
 
 /// A candidate buffer far too small at first grows (the step stops, the host enlarges the
@@ -704,8 +703,5 @@ fn gpu_candidate_buffer_grows_and_the_run_is_unchanged() {
     assert_eq!(grows, 0);
     assert!(grows_small > 0, "a buffer of 8 candidates must grow");
     assert_eq!(history_bits(&r), history_bits(&rs));
-    assert_eq!(
-        u.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>(),
-        us.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>()
-    );
+    assert_eq!(displacement_bits(&u), displacement_bits(&us));
 }
