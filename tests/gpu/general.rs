@@ -66,6 +66,28 @@ fn run_gpu_with(
     (r, model, u, grows)
 }
 
+/// Runs scene text on the CPU reference: the result and the final displacements.
+fn run_cpu(text: &str, name: &str) -> (ricochet::run::RunResult, Vec<[f64; 2]>) {
+    let (scene, model, plan) = load(text, name);
+    let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
+    let dir = tmp_dir(name);
+    let r = run(&scene, &model, &plan, &mut cpu, &dir, None).expect("cpu run");
+    let _ = std::fs::remove_dir_all(&dir);
+    (r, cpu.displacement().to_vec())
+}
+
+/// How far apart two GPU solves of the same scene may end in a node's displacement when they
+/// stop in different sweeps. Each stops once no gap changes by more than
+/// `solve::TOLERANCE` x the search margin in a sweep, and plain sweeps reduce the striker's
+/// nearly redundant two-pass pairs by about 1 % a sweep. So a stopped solve may still lie 100
+/// such changes from its limit. On the striker that is 8.3e-7 m. Measured there (session 19),
+/// every GPU path lies 1.4e-7 to 1.7e-7 m from the f64 CPU reference, both on lavapipe and on an
+/// H100. The CPU reference stops at 1e-13 of the margin.
+fn solve_accuracy(model: &Model) -> f64 {
+    let margin = ricochet::contact::ContactSet::new(model).map_or(0.0, |c| c.margin());
+    100.0 * ricochet::gpu::contact::solve::TOLERANCE * margin
+}
+
 /// The bits of every node's displacement, for comparing two runs bit for bit.
 fn displacement_bits(u: &[[f64; 2]]) -> Vec<[u64; 2]> {
     u.iter().map(|x| x.map(f64::to_bits)).collect()
@@ -156,11 +178,7 @@ fn gpu_striker_into_plate_follows_the_cpu_contact_energy_row_by_row() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let text = asset_path("stress/striker_plate_gpu_energy.toml");
-    let (scene, model, plan) = load(&text, "striker-cpu");
-    let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
-    let dir = tmp_dir("striker-cpu");
-    let rc = run(&scene, &model, &plan, &mut cpu, &dir, None).expect("cpu run");
-    let _ = std::fs::remove_dir_all(&dir);
+    let (rc, _) = run_cpu(&text, "striker-cpu");
     let (rg, _, _) = run_gpu(&ctx, &text, "striker-gpu", None);
     let ke0 = rc.samples[0].0.kinetic;
     let mut worst: f64 = 0.0;
@@ -196,22 +214,9 @@ fn gpu_per_colour_solve_matches_the_one_workgroup_solve_and_the_cpu() {
     let (r1, model, u1) = run_gpu(&ctx, &text, "pile-one", Some(false));
     let (rm, _, um) = run_gpu(&ctx, &text, "pile-multi", Some(true));
     let (rm2, _, _) = run_gpu(&ctx, &text, "pile-multi2", Some(true));
-    let (scene, cmodel, plan) = load(&text, "pile-cpu");
-    let mut cpu = CpuSolver::new(cmodel, plan.clone(), schedule(&scene));
-    let dir = tmp_dir("pile-cpu");
-    let rc = run(&scene, &model, &plan, &mut cpu, &dir, None).expect("cpu run");
-    let _ = std::fs::remove_dir_all(&dir);
-    let du = u1
-        .iter()
-        .zip(&um)
-        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-        .fold(0.0, f64::max);
-    let uc = cpu.displacement();
-    let dc = um
-        .iter()
-        .zip(uc)
-        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
-        .fold(0.0, f64::max);
+    let (rc, uc) = run_cpu(&text, "pile-cpu");
+    let (du, _) = compare::displacement_difference(&u1, &um);
+    let (dc, _) = compare::displacement_difference(&um, &uc);
     let h = 0.01 / 4.0;
     println!(
         "pile, 0.15 ms: |u one-group - u per-colour| {du:.2e} m, |u per-colour - u cpu| {dc:.2e} m; \
@@ -246,10 +251,13 @@ fn gpu_per_colour_solve_matches_the_one_workgroup_solve_and_the_cpu() {
 /// slots (the path of many slots on GPUs) against the solve that re-checks inside its workgroup,
 /// on the pile and on the striker whose re-checks add constraints. The split path gives the same
 /// bits on every run. Against the re-checks inside, it gives the same constraints and the same
-/// arithmetic in another kernel: the same bits on lavapipe. On an H100 the two differ from the
-/// second history row on by 1e-9 relative, presumably because the driver contracts multiply-adds
-/// differently in the two kernels (not pinned down). So on a hardware adapter they are held to
-/// round-off instead.
+/// arithmetic in another kernel: the same bits on lavapipe. On an H100 the pile's bits match, but
+/// the striker's differ from the second history row on, presumably because the driver contracts
+/// multiply-adds differently in the two kernels (not pinned down). The sweeps then stop in other
+/// sweeps (23.69 and 23.99 a step on average), and the final displacements differ by 1.5e-7 m.
+/// Either path lies about that far from the f64 CPU reference. So on a hardware adapter the two
+/// are held to [`solve_accuracy`], and on every adapter the striker on either path is held to
+/// that accuracy against the CPU reference.
 #[test]
 fn gpu_split_rechecks_match_the_one_workgroup_solve() {
     let Some(ctx) = context() else { return };
@@ -262,7 +270,7 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
             split: Some(split),
             ..ContactOptions::default()
         };
-        let (r1, _, u1, _) = run_gpu_with(&ctx, &text, &format!("{name}-inside"), with(false));
+        let (r1, model, u1, _) = run_gpu_with(&ctx, &text, &format!("{name}-inside"), with(false));
         let (r2, _, u2, _) = run_gpu_with(&ctx, &text, &format!("{name}-split"), with(true));
         let (r3, _, u3, _) = run_gpu_with(&ctx, &text, &format!("{name}-split2"), with(true));
         let (du, umax) = compare::displacement_difference(&u1, &u2);
@@ -303,11 +311,23 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
                 "{name}: sweeps differ"
             );
         }
+        let accuracy = solve_accuracy(&model);
         assert!(
-            du <= 1e-5 * umax,
-            "{name}: displacements differ by {du:e} m"
+            du <= accuracy,
+            "{name}: displacements differ by {du:e} m (solve accuracy {accuracy:e} m)"
         );
         assert!(de <= 1e-5 * ke0, "{name}: energies differ by {de:e} J");
+        if name == "striker" {
+            let (_, uc) = run_cpu(&text, "striker-split-cpu");
+            for (path, u) in [("inside", &u1), ("split", &u2)] {
+                let (dc, _) = compare::displacement_difference(u, &uc);
+                println!("striker, {path}: |u - u_cpu| {dc:.2e} m of {accuracy:.2e} m");
+                assert!(
+                    dc <= accuracy,
+                    "striker, {path}: {dc:e} m from the CPU reference"
+                );
+            }
+        }
     }
 }
 
@@ -401,11 +421,13 @@ fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
 /// two meshes, whose nearly redundant pairs plain sweeps reduce by about 1 % a sweep) and on the
 /// pile (walls and disk-disk contacts, few sweeps either way). Both stop at the same tolerance on
 /// the gaps, 1e-4 of the search margin (`solve::TOLERANCE`), so they agree to the solve's
-/// tolerance, not to round-off: the energies within 1e-4 of the kinetic energy at the start, the
-/// displacements within 1e-4 of the largest, and no disk's node inside another. The extrapolated
+/// accuracy, not to round-off: the energies within 1e-4 of the kinetic energy at the start, the
+/// displacements within [`solve_accuracy`] (measured on the striker: 4.9e-8 m on lavapipe,
+/// 1.0e-7 m on an H100, against 8.3e-7 m), and no disk's node inside another. The extrapolated
 /// run gives the same bits twice, and on the striker takes at most 0.6 x the plain sweeps a step
-/// (on average; measured on lavapipe: 23.5 against 88.8, at most 115 against 730) and fewer at
-/// most; its energy balance stays below 1e-4 or no worse than the plain run's.
+/// (on average; measured on lavapipe: 23.5 against 88.8, at most 115 against 730; on an H100
+/// 23.7 against 102.3) and fewer at most; its energy balance stays below 1e-4 or no worse than
+/// the plain run's.
 #[test]
 fn gpu_extrapolated_sweeps_agree_with_plain_ones_in_fewer_sweeps() {
     let Some(ctx) = context() else { return };
@@ -457,9 +479,10 @@ fn gpu_extrapolated_sweeps_agree_with_plain_ones_in_fewer_sweeps() {
             "{name}: two runs differ"
         );
         assert_eq!(rp.samples.len(), re.samples.len());
+        let accuracy = solve_accuracy(&model);
         assert!(
-            du <= 1e-4 * umax,
-            "{name}: displacements differ by {du:e} m"
+            du <= accuracy,
+            "{name}: displacements differ by {du:e} m (solve accuracy {accuracy:e} m)"
         );
         assert!(de <= 1e-4 * ke0, "{name}: energies differ by {de:e} J");
         assert!(
@@ -650,14 +673,10 @@ fn gpu_and_cpu_pile_of_a_hundred_disks_collide_without_penetration_and_with_the_
     assert!(text.contains("end_time = 2.5e-4"), "the pile's end time");
     let (r, model, u) = run_gpu(&ctx, &text, "pile100-a", None);
     let (r2, _, u2) = run_gpu(&ctx, &text, "pile100-b", None);
-    let (scene, cmodel, plan) = load(&text, "pile100-cpu");
-    let mut cpu = CpuSolver::new(cmodel, plan.clone(), schedule(&scene));
-    let dir = tmp_dir("pile100-cpu");
-    let rc = run(&scene, &model, &plan, &mut cpu, &dir, None).expect("cpu run");
-    let _ = std::fs::remove_dir_all(&dir);
+    let (rc, uc) = run_cpu(&text, "pile100-cpu");
     let h = 0.01 / 6.0;
     let gpu_in = interpenetration(&model, &u);
-    let cpu_in = interpenetration(&model, cpu.displacement());
+    let cpu_in = interpenetration(&model, &uc);
     let active = r
         .samples
         .iter()
