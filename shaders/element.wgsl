@@ -1,5 +1,6 @@
 // Element stage: one-point 4-node quad, total Lagrangian, one thread per element.
-// Mirrors ricochet::step::element::evaluate (the f64 CPU reference) line by line in f32.
+// Mirrors ricochet::step::element::evaluate (the f64 CPU reference) in f32, its loops over the
+// corners as vec4 operations.
 // A triangle is a collapsed quad (nodes.z == nodes.w): no hourglass control, centroid weights
 // 1/3, one corner to check, the triangle's stable-step length (see the CPU module's notes).
 
@@ -245,36 +246,42 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let el = elems[e];
     let b = bodies[el.body];
-    let x = array<vec2<f32>, 4>(el.c01.xy, el.c01.zw, el.c23.xy, el.c23.zw);
+    // Per-corner quantities as vec4s over the corners (x components, y components): every loop
+    // over the corners is a vector operation, with no array indexed in a loop (lavapipe kept
+    // such arrays in memory, per lane).
+    let xs = vec4<f32>(el.c01.x, el.c01.z, el.c23.x, el.c23.z);
+    let ys = vec4<f32>(el.c01.y, el.c01.w, el.c23.y, el.c23.w);
     let s0 = nodes[el.nodes.x];
     let s1 = nodes[el.nodes.y];
     let s2 = nodes[el.nodes.z];
     let s3 = nodes[el.nodes.w];
-    let u = array<vec2<f32>, 4>(s0.xy, s1.xy, s2.xy, s3.xy);
+    let ux = vec4<f32>(s0.x, s1.x, s2.x, s3.x);
+    let uy = vec4<f32>(s0.y, s1.y, s2.y, s3.y);
+    let vx = vec4<f32>(s0.z, s1.z, s2.z, s3.z);
+    let vy = vec4<f32>(s0.w, s1.w, s2.w, s3.w);
     let ur = 2u * params.n_nodes;
     let vr = params.n_nodes;
-    let vlo = array<vec2<f32>, 4>(v_prev[vr + el.nodes.x], v_prev[vr + el.nodes.y], v_prev[vr + el.nodes.z],
-                                  v_prev[vr + el.nodes.w]);
-    let ulo = array<vec2<f32>, 4>(v_prev[ur + el.nodes.x], v_prev[ur + el.nodes.y], v_prev[ur + el.nodes.z],
-                                  v_prev[ur + el.nodes.w]);
-    let v = array<vec2<f32>, 4>(s0.zw, s1.zw, s2.zw, s3.zw);
+    let vl0 = v_prev[vr + el.nodes.x];
+    let vl1 = v_prev[vr + el.nodes.y];
+    let vl2 = v_prev[vr + el.nodes.z];
+    let vl3 = v_prev[vr + el.nodes.w];
+    let ul0 = v_prev[ur + el.nodes.x];
+    let ul1 = v_prev[ur + el.nodes.y];
+    let ul2 = v_prev[ur + el.nodes.z];
+    let ul3 = v_prev[ur + el.nodes.w];
     let tri = el.nodes.z == el.nodes.w;
     // Corner weights at the centre: 1/4 each, or 1/3 on a triangle's three corners.
     let wc = select(vec4<f32>(0.25), vec4<f32>(1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0, 0.0), tri);
 
     // Reference geometry at the centre.
-    let area0 = 0.5 * ((x[2].x - x[0].x) * (x[3].y - x[1].y) - (x[3].x - x[1].x) * (x[2].y - x[0].y));
+    let area0 = 0.5 * ((xs.z - xs.x) * (ys.w - ys.y) - (xs.w - xs.y) * (ys.z - ys.x));
     let sc = 0.5 / area0;
-    let bx = array<f32, 4>(sc * (x[1].y - x[3].y), sc * (x[2].y - x[0].y), sc * (x[3].y - x[1].y), sc * (x[0].y - x[2].y));
-    let by = array<f32, 4>(sc * (x[3].x - x[1].x), sc * (x[0].x - x[2].x), sc * (x[1].x - x[3].x), sc * (x[2].x - x[0].x));
-    let hx = x[0].x - x[1].x + x[2].x - x[3].x;
-    let hy = x[0].y - x[1].y + x[2].y - x[3].y;
-    let gamma = array<f32, 4>(
-        1.0 - hx * bx[0] - hy * by[0],
-        -1.0 - hx * bx[1] - hy * by[1],
-        1.0 - hx * bx[2] - hy * by[2],
-        -1.0 - hx * bx[3] - hy * by[3],
-    );
+    // b_a = dN_a/dX at the centre: (y_{a+1} - y_{a-1}, x_{a-1} - x_{a+1}) / (2 A0).
+    let bx = sc * (ys.yzwx - ys.wxyz);
+    let by = sc * (xs.wxyz - xs.yzwx);
+    let hx = xs.x - xs.y + xs.z - xs.w;
+    let hy = ys.x - ys.y + ys.z - ys.w;
+    let gamma = vec4<f32>(1.0, -1.0, 1.0, -1.0) - hx * bx - hy * by;
     // Axisymmetric: F_33 = r / R at the centre, its rate, the volume per radian A0 R.
     let axi = b.formulation == 2u;
     var zm1 = 0.0;
@@ -282,8 +289,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var a0t = area0 * b.thickness;
     if (axi) {
         let rr = el.radius;
-        zm1 = dot(wc, vec4<f32>(u[0].x, u[1].x, u[2].x, u[3].x)) / rr;
-        f33d = dot(wc, vec4<f32>(v[0].x, v[1].x, v[2].x, v[3].x)) / rr;
+        zm1 = dot(wc, ux) / rr;
+        f33d = dot(wc, vx) / rr;
         a0t = area0 * rr;
     }
 
@@ -296,15 +303,17 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // gravity once it has slid a few mm) drove the elements like a random load, so the difference
     // adds the corners' residuals (the low parts of their displacements), and the same for the
     // velocities (a body sliding at 1 m/s: half an ulp is 6e-8 m/s).
-    var h = vec4<f32>(0.0);   // xx xy yx yy
-    var fd = vec4<f32>(0.0);
-    var du: array<vec2<f32>, 4>;
-    for (var a = 1; a < 4; a++) {
-        du[a] = (u[a] - u[0]) + (ulo[a] - ulo[0]);
-        let dw = (v[a] - v[0]) + (vlo[a] - vlo[0]);
-        h += vec4<f32>(du[a].x * bx[a], du[a].x * by[a], du[a].y * bx[a], du[a].y * by[a]);
-        fd += vec4<f32>(dw.x * bx[a], dw.x * by[a], dw.y * bx[a], dw.y * by[a]);
-    }
+    // (Corner 0's differences are 0, so the dot products sum corners 1 to 3.)
+    let ulx = vec4<f32>(ul0.x, ul1.x, ul2.x, ul3.x);
+    let uly = vec4<f32>(ul0.y, ul1.y, ul2.y, ul3.y);
+    let vlx = vec4<f32>(vl0.x, vl1.x, vl2.x, vl3.x);
+    let vly = vec4<f32>(vl0.y, vl1.y, vl2.y, vl3.y);
+    let dux = (ux - ux.x) + (ulx - ulx.x);
+    let duy = (uy - uy.x) + (uly - uly.x);
+    let dwx = (vx - vx.x) + (vlx - vlx.x);
+    let dwy = (vy - vy.x) + (vly - vly.x);
+    let h = vec4<f32>(dot(dux, bx), dot(dux, by), dot(duy, bx), dot(duy, by));   // xx xy yx yy
+    let fd = vec4<f32>(dot(dwx, bx), dot(dwx, by), dot(dwy, bx), dot(dwy, by));
     let f = h + vec4<f32>(1.0, 0.0, 0.0, 1.0);
     let jm1 = h.x + h.w + h.x * h.w - h.y * h.z;   // J - 1 without cancellation
     let j = 1.0 + jm1;
@@ -384,79 +393,60 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 
     // Current geometry.
-    var xc: array<vec2<f32>, 4>;
-    for (var a = 0; a < 4; a++) {
-        xc[a] = x[a] + u[a];
-    }
-    let area = 0.5 * ((xc[2].x - xc[0].x) * (xc[3].y - xc[1].y) - (xc[3].x - xc[1].x) * (xc[2].y - xc[0].y));
-    var min_corner = 3.0e38;
-    let n_corners = select(4, 1, tri);
-    for (var a = 0; a < n_corners; a++) {
-        let p = xc[(a + 3) % 4];
-        let c = xc[a];
-        let n = xc[(a + 1) % 4];
-        min_corner = min(min_corner, (n.x - c.x) * (p.y - c.y) - (n.y - c.y) * (p.x - c.x));
-    }
+    let cx = xs + ux;
+    let cy = ys + uy;
+    let area = 0.5 * ((cx.z - cx.x) * (cy.w - cy.y) - (cx.w - cx.y) * (cy.z - cy.x));
+    // Each corner's turn (next - corner) x (previous - corner); a triangle checks corner 0 only.
+    let turn = (cx.yzwx - cx) * (cy.wxyz - cy) - (cy.yzwx - cy) * (cx.wxyz - cx);
+    let first = min(3.0e38, turn.x);
+    let min_corner = select(min(min(min(first, turn.y), turn.z), turn.w), first, tri);
     if (!(min_corner > 0.0)) {
         atomicMin(&ctrl.bad_element, e);
     }
-    let d01 = xc[1] - xc[0];
-    let d12 = xc[2] - xc[1];
-    let d23 = xc[3] - xc[2];
-    let d30 = xc[0] - xc[3];
-    let d02 = xc[2] - xc[0];
-    let d13 = xc[3] - xc[1];
-    let side = max(max(dot(d01, d01), dot(d12, d12)), max(dot(d23, d23), dot(d30, d30)));
-    let diag = 0.5 * max(dot(d02, d02), dot(d13, d13));
+    // Sides (corner a to a + 1) and the two diagonals, squared.
+    let sx = cx.yzwx - cx;
+    let sy = cy.yzwx - cy;
+    let sides = sx * sx + sy * sy;
+    let side = max(max(sides.x, sides.y), max(sides.z, sides.w));
+    let gx = cx.zw - cx.xy;
+    let gy = cy.zw - cy.xy;
+    let diags = gx * gx + gy * gy;
+    let diag = 0.5 * max(diags.x, diags.y);
     let aa = abs(area);
     // A triangle: sqrt(8/3) area / longest side (CPU: TRIANGLE_LENGTH).
     let length = aa / sqrt(max(side, diag)) * select(1.0, 1.6329932, tri);
     let rho = b.density * area0 / max(aa, 1e-37);
     let c = sqrt(b.wave_modulus / rho);
 
-    var force: array<vec2<f32>, 4>;
-    for (var a = 0; a < 4; a++) {
-        force[a] = -a0t * vec2<f32>(pk.x * bx[a] + pk.y * by[a], pk.z * bx[a] + pk.w * by[a]);
-    }
+    // The corners' forces (x components, y components).
+    var fx = -a0t * (pk.x * bx + pk.y * by);
+    var fy = -a0t * (pk.z * bx + pk.w * by);
     if (axi) {
         // The hoop stress on u_r: dF_33 / du_r,a = N_a / R.
         let hoop = a0t * p33 / el.radius;
-        for (var a = 0; a < 4; a++) {
-            force[a].x -= wc[a] * hoop;
-        }
+        fx -= wc * hoop;
     }
 
     // Hourglass control.
-    var bb = 0.0;
-    var gg = 0.0;
-    for (var a = 0; a < 4; a++) {
-        bb += bx[a] * bx[a] + by[a] * by[a];
-        gg += gamma[a] * gamma[a];
-    }
+    let bb = dot(bx, bx) + dot(by, by);
+    let gg = dot(gamma, gamma);
     var hg_stored = 0.0;
     var hg_q = vec2<f32>(0.0);
     var hg_rate = vec2<f32>(0.0);
     if (b.hourglass == 2u && !tri) {
         // Scaled with the shear modulus 2 mu (see ElementParams::hourglass_modulus).
         let k = b.hourglass_coefficient * 2.0 * b.mu * a0t * bb / gg;
-        var q = vec2<f32>(0.0);
-        for (var a = 1; a < 4; a++) {
-            q += gamma[a] * du[a];
-        }
-        for (var a = 0; a < 4; a++) {
-            force[a] -= k * gamma[a] * q;
-        }
+        let q = vec2<f32>(dot(gamma, dux), dot(gamma, duy));
+        fx -= k * gamma * q.x;
+        fy -= k * gamma * q.y;
         hg_stored = 0.5 * k * dot(q, q);
     } else if (b.hourglass == 1u && !tri) {
         let rho_c = sqrt(2.0 * b.mu * b.density);
         let damp = b.hourglass_coefficient * rho_c * a0t * sqrt(bb) / gg;
-        for (var a = 1; a < 4; a++) {
-            hg_rate += gamma[a] * (v[a] - v[0]);
-        }
+        hg_rate = vec2<f32>(dot(gamma, vx - vx.x), dot(gamma, vy - vy.x));
         hg_q = damp * hg_rate;
-        for (var a = 0; a < 4; a++) {
-            force[a] -= gamma[a] * hg_q;
-        }
+        fx -= gamma * hg_q.x;
+        fy -= gamma * hg_q.y;
     }
 
     // Bulk viscosity.
@@ -487,14 +477,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         // Linear part always (no jump in dt between compression and expansion), quadratic in compression.
         let qs = b.bulk_linear * c + b.bulk_quadratic * length * max(-rate, 0.0);
         dt = length / (qs + sqrt(qs * qs + c * c));
-        for (var a = 0; a < 4; a++) {
-            force[a] -= a0t * vec2<f32>(bulk_p.x * bx[a] + bulk_p.y * by[a], bulk_p.z * bx[a] + bulk_p.w * by[a]);
-        }
+        fx -= a0t * (bulk_p.x * bx + bulk_p.y * by);
+        fy -= a0t * (bulk_p.z * bx + bulk_p.w * by);
         if (axi) {
             let hoop = a0t * bulk_hoop / el.radius;
-            for (var a = 0; a < 4; a++) {
-                force[a].x -= wc[a] * hoop;
-            }
+            fx -= wc * hoop;
         }
     }
 
@@ -516,9 +503,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 //#endif
 
-    for (var a = 0u; a < 4u; a++) {
-        elem_force[4u * e + a] = force[a];
-    }
+    elem_force[4u * e] = vec2<f32>(fx.x, fy.x);
+    elem_force[4u * e + 1u] = vec2<f32>(fx.y, fy.y);
+    elem_force[4u * e + 2u] = vec2<f32>(fx.z, fy.z);
+    elem_force[4u * e + 3u] = vec2<f32>(fx.w, fy.w);
     elem_dt[e] = dt;
     if ((ctrl.flags & FLAG_SAMPLE) != 0u) {
         sample_src[params.n_nodes + e] = vec4<f32>(w * a0t, hg_stored, works);

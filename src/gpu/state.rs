@@ -15,8 +15,20 @@ use super::layout::*;
 use super::{boundary, element, loads, node, reduce};
 use crate::contact::ContactSet;
 
-/// Nodes + elements + constraints up to which a CPU adapter reduces in one workgroup.
-pub const FUSED_LIMIT: usize = 1 << 14;
+/// Nodes + elements + constraints up to which a CPU adapter reduces in one workgroup (the
+/// control workgroup, instead of a first level over many workgroups and a dispatch of its own).
+/// On lavapipe a dispatch costs about 29 us of hand-off to its thread pool, more than the
+/// control workgroup takes to reduce these values itself. Measured on the 2-core machine
+/// (session 19, the same scene fused and not, alternated in one process): the 10^4 pile
+/// (about 23 000 values) 1 449 -> 1 290-1 350 us a step; at 10^5 (about 210 000 values) the
+/// two are within the noise (the pile 10 319 against 10 125 us, the striker 7 674 against 7 446).
+pub const FUSED_LIMIT: usize = 1 << 17;
+
+/// Sample instances (one per body, and the elements, constraints, loads) up to which a CPU
+/// adapter reduces in one workgroup: the control workgroup sums them one after another on sample
+/// steps, each with its barrier tree. The 10^5 pile's 1 026 instances were measured with
+/// [`FUSED_LIMIT`]; a scene of more bodies keeps the reduction over many workgroups.
+pub const FUSED_INSTANCES: usize = 1 << 11;
 
 /// Workgroups of the sums' second level at most (`sum_instances`; each takes every this-many-th
 /// instance beyond): the dispatch limit per dimension.
@@ -320,7 +332,9 @@ impl GpuState {
         }
         // Small models on CPU adapters: the control workgroup reduces directly (see control.wgsl).
         let fused = fused.unwrap_or(
-            kernels.features.reduce_group == 64 && nn + ne + nc + nl + npl <= FUSED_LIMIT,
+            kernels.features.reduce_group == 64
+                && nn + ne + nc + nl + npl <= FUSED_LIMIT
+                && instances.len() <= FUSED_INSTANCES,
         );
         let sum_groups = if fused { 0 } else { first };
 
