@@ -86,6 +86,13 @@ struct ContactParams {
     o_nlist: u32,
     o_dvp: u32,
     extrapolate: u32,     // 1: extrapolate (one-workgroup path); 0: plain sweeps
+    // The one-workgroup solve's packed rows (contact_solve.wgsl `pack`): per compacted constraint
+    // its nodes' packed indices (ws, 3 words), its row (fws, 2 vec4) and friction row (fws, 1
+    // vec4, with friction); the packed nodes (fws, n_local + 1 vec4).
+    o_cidx: u32,
+    f_row: u32,
+    f_frow: u32,
+    f_node: u32,
 }
 
 // Indirect entry of the kernels over the active slots (src/gpu/contact/mod.rs ACTIVE_ENTRY).

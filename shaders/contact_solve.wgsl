@@ -63,12 +63,6 @@ fn mask_of(i: u32) -> u32 {
     return ws[cc.p.o_mask + i];
 }
 
-fn clear_mask(i: u32) {
-    if (i != NONE) {
-        ws[cc.p.o_mask + i] = 0u;
-    }
-}
-
 // Marks node i with colour bit c; a node seen for the first time joins the list of the
 // constraints' nodes (ws[o_nlist..], sh_nn of them) that the extrapolation moves on.
 fn mark_node(i: u32, c: u32) {
@@ -159,13 +153,130 @@ fn compact(l: u32) {
             let col = ws[cc.p.o_list + j];
             ws[cc.p.o_act + sh_off[col] + count[col]] = k;
             count[col] += 1u;
-            clear_mask(slots[k].s);
-            clear_mask(c.a);
-            clear_mask(c.b);
         }
     }
     storageBarrier();
     workgroupBarrier();
+}
+
+// The packed index of node i (`pack`): `dummy` (the zero record) for a wall's missing segment.
+fn packed_index(i: u32, dummy: u32) -> u32 {
+    if (i == NONE) {
+        return dummy;
+    }
+    return ws[cc.p.o_mask + i];
+}
+
+// The compacted constraints packed for the sweeps, which then read and write nothing else
+// (on lavapipe a sweep's update had cost about 280 ns, most of it in loads of Cons, Slot, c_ref
+// and c_pv): each node of theirs (ws[o_nlist..], sh_nn) a record (dv, 1/m) at fws[f_node + j],
+// and in place of its colour mask its packed index j; the record after the last stays zero and
+// stands for a wall's missing segment. Each constraint q its nodes' packed indices
+// (ws[o_cidx + 3q..]), its row (n, g0, w), (lambda, lt, xi, mu) at fws[f_row + 2q..] and, with
+// friction, (wt, the free update's relative tangential velocity) at fws[f_frow + q]. `unpack`
+// writes dv and the multipliers back.
+fn pack(l: u32) {
+    let nn = sh_nn;
+    for (var j = l; j < nn; j += SG) {
+        let i = ws[cc.p.o_nlist + j];
+        fws[cc.p.f_node + j] = vec4<f32>(dv(i), c_ref[i].zw);
+        ws[cc.p.o_mask + i] = j;
+    }
+    if (l == 0u) {
+        fws[cc.p.f_node + nn] = vec4<f32>(0.0);
+    }
+    storageBarrier();
+    let na = sh_off[SERIAL + 1u];
+    for (var q = l; q < na; q += SG) {
+        let k = ws[cc.p.o_act + q];
+        let c = cons[k];
+        let s = slots[k].s;
+        let at = cc.p.o_cidx + 3u * q;
+        ws[at] = ws[cc.p.o_mask + s];
+        ws[at + 1u] = packed_index(c.a, nn);
+        ws[at + 2u] = packed_index(c.b, nn);
+        fws[cc.p.f_row + 2u * q] = vec4<f32>(c.n, c.g0, c.w);
+        fws[cc.p.f_row + 2u * q + 1u] = vec4<f32>(c.lambda, c.lt, c.xi, c.mu);
+        if (c.mu > 0.0) {
+            fws[cc.p.f_frow + q] = vec4<f32>(c.wt, free_relative_along(c, s, tangent(c)), 0.0, 0.0);
+        }
+    }
+    storageBarrier();
+}
+
+// The packed nodes' dv and the constraints' multipliers written back; the colour masks cleared.
+fn unpack(l: u32) {
+    let nn = sh_nn;
+    for (var j = l; j < nn; j += SG) {
+        let i = ws[cc.p.o_nlist + j];
+        c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, fws[cc.p.f_node + j].xy);
+        ws[cc.p.o_mask + i] = 0u;
+    }
+    let na = sh_off[SERIAL + 1u];
+    for (var q = l; q < na; q += SG) {
+        let k = ws[cc.p.o_act + q];
+        let r = fws[cc.p.f_row + 2u * q + 1u];
+        cons[k].lambda = r.x;
+        cons[k].lt = r.y;
+    }
+    storageBarrier();
+}
+
+// pgs_update on packed constraint q (`pack`; `dummy` the zero record): the same arithmetic.
+fn pgs_packed(q: u32, dt: f32, inv_scale: f32, dummy: u32) -> f32 {
+    let r0 = fws[cc.p.f_row + 2u * q];
+    var r1 = fws[cc.p.f_row + 2u * q + 1u];
+    let at = cc.p.o_cidx + 3u * q;
+    let s = cc.p.f_node + ws[at];
+    let a = cc.p.f_node + ws[at + 1u];
+    let b = cc.p.f_node + ws[at + 2u];
+    var ns = fws[s];
+    var na = fws[a];
+    var nb = fws[b];
+    let n = r0.xy;
+    let xi = r1.z;
+    var rel = dot(ns.xy, n);
+    rel -= (1.0 - xi) * dot(na.xy, n) + xi * dot(nb.xy, n);
+    let g = r0.z + dt * rel;
+    let lambda = max(r1.x - g / r0.w, 0.0);
+    let d = lambda - r1.x;
+    var moved = false;
+    if (d != 0.0) {
+        ns = vec4<f32>(ns.xy + d * inv_scale * n * ns.zw, ns.zw);
+        na = vec4<f32>(na.xy + -(1.0 - xi) * d * inv_scale * n * na.zw, na.zw);
+        nb = vec4<f32>(nb.xy + -xi * d * inv_scale * n * nb.zw, nb.zw);
+        r1.x = lambda;
+        moved = true;
+    }
+    var change = abs(d * r0.w);
+    if (r1.w > 0.0) {
+        // Coulomb, as in pgs_update.
+        let fr = fws[cc.p.f_frow + q];
+        let t = vec2<f32>(-n.y, n.x);
+        var vt = dot(ns.xy, t);
+        vt -= (1.0 - xi) * dot(na.xy, t) + xi * dot(nb.xy, t);
+        vt = fr.y + vt;
+        let bound = r1.w * lambda;
+        let lt = clamp(r1.y - vt / fr.x, -bound, bound);
+        let e = lt - r1.y;
+        if (e != 0.0) {
+            ns = vec4<f32>(ns.xy + e * inv_scale * t * ns.zw, ns.zw);
+            na = vec4<f32>(na.xy + -(1.0 - xi) * e * inv_scale * t * na.zw, na.zw);
+            nb = vec4<f32>(nb.xy + -xi * e * inv_scale * t * nb.zw, nb.zw);
+            r1.y = lt;
+            change = max(change, abs(e * fr.x * dt));
+            moved = true;
+        }
+    }
+    if (moved) {
+        fws[s] = ns;
+        if (a != cc.p.f_node + dummy) {
+            fws[a] = na;
+            fws[b] = nb;
+        }
+        fws[cc.p.f_row + 2u * q + 1u] = r1;
+    }
+    return change;
 }
 
 // The factor before the k-th sweep since the sweeps (re)started (crate::contact::extrapolation):
@@ -178,32 +289,32 @@ fn extrapolation(k: u32) -> f32 {
     return EXTRAPOLATION;
 }
 
-// ContactSet::extrapolate: each compacted constraint's (lambda, lt) and each of their nodes' dv
-// moved on by beta times their change since the last call (no impulse: dv is linear in the
-// multipliers, and a negative multiplier is projected by its own update in the sweep); the
-// values reached are kept for the next call. beta = 0 only keeps them.
+// ContactSet::extrapolate on the packed rows and nodes: each compacted constraint's (lambda, lt)
+// and each of their nodes' dv moved on by beta times their change since the last call (no
+// impulse: dv is linear in the multipliers, and a negative multiplier is projected by its own
+// update in the sweep); the values reached are kept for the next call. beta = 0 only keeps them.
 fn extrapolate(l: u32, beta: f32) {
     let na = sh_off[SERIAL + 1u];
     for (var q = l; q < na; q += SG) {
-        let k = ws[cc.p.o_act + q];
-        let now = vec2<f32>(cons[k].lambda, cons[k].lt);
+        let row = cc.p.f_row + 2u * q + 1u;
+        let r = fws[row];
+        let now = r.xy;
         let at = cc.p.o_lprev + 2u * q;
         if (beta != 0.0) {
             let last = vec2<f32>(bitcast<f32>(ws[at]), bitcast<f32>(ws[at + 1u]));
-            cons[k].lambda = now.x + beta * (now.x - last.x);
-            cons[k].lt = now.y + beta * (now.y - last.y);
+            fws[row] = vec4<f32>(now.x + beta * (now.x - last.x), now.y + beta * (now.y - last.y), r.zw);
         }
         ws[at] = bitcast<u32>(now.x);
         ws[at + 1u] = bitcast<u32>(now.y);
     }
     let nn = sh_nn;
     for (var j = l; j < nn; j += SG) {
-        let i = ws[cc.p.o_nlist + j];
-        let now = dv(i);
+        let r = fws[cc.p.f_node + j];
+        let now = r.xy;
         let at = cc.p.o_dvp + 2u * j;
         if (beta != 0.0) {
             let last = vec2<f32>(bitcast<f32>(ws[at]), bitcast<f32>(ws[at + 1u]));
-            add_dv(i, beta * (now - last));
+            fws[cc.p.f_node + j] = vec4<f32>(now + beta * (now - last), r.zw);
         }
         ws[at] = bitcast<u32>(now.x);
         ws[at + 1u] = bitcast<u32>(now.y);
@@ -216,6 +327,8 @@ fn extrapolate(l: u32, beta: f32) {
 // returns the sweeps taken.
 fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
     compact(l);
+    pack(l);
+    let dummy = sh_nn;
     if (l == 0u) {
         var nc = 0u;
         for (var c = 0u; c < SERIAL; c++) {
@@ -233,6 +346,7 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
     var taken = 0u;
     var run = 0u;
     var last = 3.0e38;
+    var converged = false;
     for (var sweep = 0u; sweep < cc.p.max_sweeps; sweep++) {
         // (At the start of a run, before sweep 0 and the first sweep after a restart, the values
         // kept would not be used: the next factor is 0 as well, and its call keeps them again.)
@@ -249,13 +363,13 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
         for (var col = 0u; col < nc; col++) {
             let end = sh_off[col + 1u];
             for (var q = sh_off[col] + l; q < end; q += SG) {
-                change = max(change, pgs_update(ws[cc.p.o_act + q], dt, inv_scale));
+                change = max(change, pgs_packed(q, dt, inv_scale, dummy));
             }
             storageBarrier();
         }
         if (l == 0u) {
             for (var q = sh_off[SERIAL]; q < sh_off[SERIAL + 1u]; q++) {
-                change = max(change, pgs_update(ws[cc.p.o_act + q], dt, inv_scale));
+                change = max(change, pgs_packed(q, dt, inv_scale, dummy));
             }
         }
         taken += 1u;
@@ -272,12 +386,14 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
         }
         last = largest;
         if (!(largest > cc.p.tolerance)) {
-            return taken;
+            converged = true;
+            break;
         }
     }
-    if (l == 0u) {
+    if (!converged && l == 0u) {
         cc.unconverged += 1u;
     }
+    unpack(l);
     return taken;
 }
 

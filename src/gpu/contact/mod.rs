@@ -140,6 +140,14 @@ pub struct ContactParams {
     /// 1: the one-workgroup solve extrapolates between sweeps (0: plain projected Gauss-Seidel;
     /// the per-colour path never does).
     pub extrapolate: u32,
+    /// The one-workgroup solve's packed rows (`contact_solve.wgsl`, `pack`): ws offset of the
+    /// compacted constraints' node indices into the packed nodes (3 words each), fws offsets of
+    /// their rows (2 vec4 each), of their friction rows (1 vec4 each, with friction) and of the
+    /// packed nodes (`n_local` + 1 vec4: dv and 1/m, the last one zero for walls).
+    pub o_cidx: u32,
+    pub f_row: u32,
+    pub f_frow: u32,
+    pub f_node: u32,
 }
 
 /// Mirror of the first part of WGSL `ContactCtl` (the counters the host reads back).
@@ -209,7 +217,7 @@ pub struct GpuSegment {
 /// Size of WGSL `Cons` (scratch only).
 pub const CONS_SIZE: u64 = 64;
 
-const _: () = assert!(std::mem::size_of::<ContactParams>() == 192);
+const _: () = assert!(std::mem::size_of::<ContactParams>() == 208);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuSlot>() == 64);
 const _: () = assert!(std::mem::size_of::<GpuSegment>() == 32);
@@ -383,6 +391,9 @@ fn layout_workspace(p: &mut ContactParams) -> Workspace {
     p.o_lprev = take(2 * ns);
     p.o_nlist = take(nl);
     p.o_dvp = take(2 * nl);
+    // The one-workgroup solve's packed rows (none on the per-colour path).
+    let one = p.multi == 0;
+    p.o_cidx = if one { take(3 * ns) } else { 0 };
     let words = at;
     let mut f = 0u32;
     let mut ftake = |n: u32| {
@@ -396,6 +407,9 @@ fn layout_workspace(p: &mut ContactParams) -> Workspace {
     p.f_wp = ftake(nl.div_ceil(CG));
     // Friction partials per slot run (force along the tangents, work, its part after t_n).
     p.f_rf = if p.friction != 0 { ftake(ns) } else { 0 };
+    p.f_row = if one { ftake(2 * ns) } else { 0 };
+    p.f_frow = if one && p.friction != 0 { ftake(ns) } else { 0 };
+    p.f_node = if one { ftake(nl + 1) } else { 0 };
     Workspace { words, vec4s: f }
 }
 
