@@ -934,6 +934,11 @@ pub struct ContactRow {
     pub searches_per_100_steps: f64,
     /// Bytes read back from the device per timed step with contact (0 on the CPU).
     pub bytes_read_back_per_step: f64,
+    /// Timed against the CPU reference in the same rounds (`--backend both`): the median over
+    /// the rounds of the CPU reference's time for the steps with contact over this backend's,
+    /// i.e. this backend's speed as a multiple of the CPU's. `None` on the CPU's own row and
+    /// where the CPU reference was not timed alongside.
+    pub vs_cpu: Option<f64>,
 }
 
 /// Times `variants` in `rounds` rounds, alternating (the order reversed every other round, so
@@ -985,115 +990,143 @@ impl Timed for GpuSolver {
     }
 }
 
-/// Times two solvers of a contact scene (with and without its contact) in alternating rounds
-/// (after `timing.warmup` warm-up steps each, at least 2: the first search included) and fills a
-/// row.
-#[allow(clippy::too_many_arguments)]
-fn contact_row<S: Timed>(
-    which: ContactScene,
-    backend: &str,
+/// One backend's solvers of a contact scene, as [`contact_rows`] times them: with and without
+/// the scene's `[[contact]]`, and with friction when asked.
+struct Side<'a> {
+    backend: &'static str,
     adapter: String,
+    with: &'a mut dyn Timed,
+    without: &'a mut dyn Timed,
+    friction: Option<&'a mut dyn Timed>,
+}
+
+impl Side<'_> {
+    fn variants(&mut self) -> Vec<(&'static str, &mut dyn Timed)> {
+        let mut v: Vec<(&'static str, &mut dyn Timed)> =
+            vec![("contact", &mut *self.with), ("free", &mut *self.without)];
+        if let Some(f) = self.friction.as_mut() {
+            v.push(("friction", &mut **f));
+        }
+        v
+    }
+}
+
+/// Times the solvers of every side of a contact scene (each with and without its contact, and
+/// with friction when asked) in alternating rounds, all sides in the same rounds (after
+/// `timing.warmup` warm-up steps each, at least 2: the first search included), and fills a row
+/// per side. The sides after a first `"cpu"` side get [`ContactRow::vs_cpu`].
+fn contact_rows(
+    which: ContactScene,
     size: usize,
     model: &Model,
-    with: &mut S,
-    without: &mut S,
-    mut friction: Option<(f64, &mut S)>,
+    mut sides: Vec<Side<'_>>,
+    mu: Option<f64>,
     timing: &ContactTiming,
-) -> Result<ContactRow> {
+) -> Result<Vec<ContactRow>> {
     let rounds = timing.rounds.max(1);
     let per = per_round(timing.steps, rounds);
     let warmup = timing.warmup.max(DEFAULT_WARMUP);
-    let mut warm: Vec<(&str, &mut S)> = vec![("contact", &mut *with), ("free", &mut *without)];
-    if let Some((_, f)) = friction.as_mut() {
-        warm.push(("friction", &mut **f));
-    }
-    for (what, s) in warm {
-        let taken = s.take(warmup)?;
-        if taken < warmup {
-            return Err(stopped(
-                &format!("{backend} {} {what} warm-up", which.name()),
-                taken,
-                warmup,
-            ));
+    for side in &mut sides {
+        let backend = side.backend;
+        for (what, s) in side.variants() {
+            let taken = s.take(warmup)?;
+            if taken < warmup {
+                return Err(stopped(
+                    &format!("{backend} {} {what} warm-up", which.name()),
+                    taken,
+                    warmup,
+                ));
+            }
         }
     }
-    let before = with.count();
-    let run = |s: &mut S, what: &str| -> Result<f64> {
-        let t0 = Instant::now();
-        let taken = s.take(per)?;
-        let t = t0.elapsed().as_secs_f64();
-        if taken < per {
-            return Err(stopped(
-                &format!("{backend} {} {what}", which.name()),
-                taken,
-                per,
-            ));
+    let before: Vec<_> = sides.iter().map(|s| s.with.count()).collect();
+    let cpu_first = sides.first().is_some_and(|s| s.backend == "cpu");
+    let meta: Vec<(&'static str, String)> = sides
+        .iter()
+        .map(|s| (s.backend, s.adapter.clone()))
+        .collect();
+    // Every variant of every side, in one alternation.
+    let mut runs: Vec<Box<dyn FnMut() -> Result<f64> + '_>> = Vec::new();
+    let mut counts = Vec::new();
+    for side in &mut sides {
+        let backend = side.backend;
+        let variants = side.variants();
+        counts.push(variants.len());
+        for (what, s) in variants {
+            runs.push(Box::new(move || {
+                let t0 = Instant::now();
+                let taken = s.take(per)?;
+                let t = t0.elapsed().as_secs_f64();
+                if taken < per {
+                    return Err(stopped(
+                        &format!("{backend} {} {what}", which.name()),
+                        taken,
+                        per,
+                    ));
+                }
+                Ok(t)
+            }));
         }
-        Ok(t)
-    };
-    let mu = friction.as_ref().map(|(mu, _)| *mu);
-    let mut friction_sweeps_mean = None;
-    let t = match friction {
-        None => alternate(
-            rounds,
-            &mut [&mut || run(&mut *with, "contact"), &mut || {
-                run(&mut *without, "free")
-            }],
-        )?,
-        Some((_, f)) => {
-            let t = alternate(
-                rounds,
-                &mut [
-                    &mut || run(&mut *with, "contact"),
-                    &mut || run(&mut *without, "free"),
-                    &mut || run(&mut *f, "friction"),
-                ],
-            )?;
-            friction_sweeps_mean = Some(f.count().contact_sweeps_mean);
-            t
-        }
-    };
-    let after = with.count();
+    }
+    let mut refs: Vec<&mut dyn FnMut() -> Result<f64>> =
+        runs.iter_mut().map(|r| &mut **r as _).collect();
+    let times = alternate(rounds, &mut refs)?;
+    drop(refs);
+    drop(runs);
     let total = per * u64::from(rounds);
-    let wall: f64 = t[0].iter().sum();
-    let (friction_steps_per_second, friction_us_per_step) = match t.get(2) {
-        Some(tf) => (
-            Some(total as f64 / tf.iter().sum::<f64>()),
-            Some(median(
-                tf.iter()
-                    .zip(&t[0])
-                    .map(|(f, c)| 1e6 * (f - c) / per as f64)
-                    .collect(),
-            )),
-        ),
-        None => (None, None),
-    };
-    let searches = after.contact_searches - before.contact_searches;
-    Ok(ContactRow {
-        scene: which,
-        backend: backend.to_string(),
-        adapter,
-        size,
-        elements: model.element_count(),
-        bodies: model.bodies.len(),
-        steps: total,
-        rounds,
-        warmup,
-        plain_sweeps: timing.plain_sweeps,
-        wall_seconds: wall,
-        steps_per_second: total as f64 / wall,
-        free_seconds: t[1].iter().sum(),
-        contact_share: median(t[0].iter().zip(&t[1]).map(|(c, f)| (c - f) / c).collect()),
-        friction: mu,
-        friction_steps_per_second,
-        friction_us_per_step,
-        sweeps_mean: after.contact_sweeps_mean,
-        friction_sweeps_mean,
-        searches,
-        searches_per_100_steps: 100.0 * searches as f64 / total as f64,
-        bytes_read_back_per_step: (after.bytes_read_back - before.bytes_read_back) as f64
-            / total as f64,
-    })
+    let mut rows = Vec::new();
+    let mut at = 0;
+    for (k, side) in sides.iter().enumerate() {
+        let t = &times[at..at + counts[k]];
+        at += counts[k];
+        let after = side.with.count();
+        let wall: f64 = t[0].iter().sum();
+        let (friction_steps_per_second, friction_us_per_step) = match t.get(2) {
+            Some(tf) => (
+                Some(total as f64 / tf.iter().sum::<f64>()),
+                Some(median(
+                    tf.iter()
+                        .zip(&t[0])
+                        .map(|(f, c)| 1e6 * (f - c) / per as f64)
+                        .collect(),
+                )),
+            ),
+            None => (None, None),
+        };
+        let vs_cpu = (cpu_first && k > 0)
+            .then(|| median(times[0].iter().zip(&t[0]).map(|(c, g)| c / g).collect()));
+        let searches = after.contact_searches - before[k].contact_searches;
+        rows.push(ContactRow {
+            scene: which,
+            backend: meta[k].0.to_string(),
+            adapter: meta[k].1.clone(),
+            size,
+            elements: model.element_count(),
+            bodies: model.bodies.len(),
+            steps: total,
+            rounds,
+            warmup,
+            plain_sweeps: timing.plain_sweeps,
+            wall_seconds: wall,
+            steps_per_second: total as f64 / wall,
+            free_seconds: t[1].iter().sum(),
+            contact_share: median(t[0].iter().zip(&t[1]).map(|(c, f)| (c - f) / c).collect()),
+            friction: mu,
+            friction_steps_per_second,
+            friction_us_per_step,
+            sweeps_mean: after.contact_sweeps_mean,
+            friction_sweeps_mean: side
+                .friction
+                .as_ref()
+                .map(|f| f.count().contact_sweeps_mean),
+            searches,
+            searches_per_100_steps: 100.0 * searches as f64 / total as f64,
+            bytes_read_back_per_step: (after.bytes_read_back - before[k].bytes_read_back) as f64
+                / total as f64,
+            vs_cpu,
+        });
+    }
+    Ok(rows)
 }
 
 /// `text` with `friction = mu` in every `[[contact]]` and `[[rigid_wall]]` table (the line goes
@@ -1129,6 +1162,76 @@ fn contact_build(
     Ok((model, plan, bench_schedule(&scene)))
 }
 
+/// The solvers of a contact scene on one backend: with and without its `[[contact]]`, and with
+/// friction when `timing.friction` asks; and the model with contact.
+type Solvers<S> = (Model, S, S, Option<S>);
+
+fn cpu_solvers(
+    which: ContactScene,
+    size: usize,
+    timing: &ContactTiming,
+) -> Result<Solvers<CpuSolver>> {
+    let pile = timing.pile;
+    let plain = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
+        let mut solver = CpuSolver::new(m, p, s);
+        if let Some(c) = solver.contact_mut() {
+            c.set_plain_sweeps(timing.plain_sweeps);
+        }
+        solver
+    };
+    let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
+    let with = plain((model.clone(), plan, schedule));
+    let without = plain(contact_build(which, size, false, pile, None)?);
+    let rough = match timing.friction {
+        Some(mu) => Some(plain(contact_build(which, size, true, pile, Some(mu))?)),
+        None => None,
+    };
+    Ok((model, with, without, rough))
+}
+
+fn gpu_solvers(
+    ctx: &Arc<GpuContext>,
+    which: ContactScene,
+    size: usize,
+    timing: &ContactTiming,
+) -> Result<Solvers<GpuSolver>> {
+    let pile = timing.pile;
+    let options = crate::gpu::contact::ContactOptions {
+        plain_sweeps: timing.plain_sweeps,
+        ..Default::default()
+    };
+    let solver = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
+        GpuSolver::with_options(ctx.clone(), &m, &p, s, None, options)
+    };
+    let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
+    let with = GpuSolver::with_options(ctx.clone(), &model, &plan, schedule, None, options)?;
+    let without = solver(contact_build(which, size, false, pile, None)?)?;
+    let rough = match timing.friction {
+        Some(mu) => Some(solver(contact_build(which, size, true, pile, Some(mu))?)?),
+        None => None,
+    };
+    Ok((model, with, without, rough))
+}
+
+fn side<'a, S: Timed>(
+    backend: &'static str,
+    adapter: String,
+    (_, with, without, rough): &'a mut Solvers<S>,
+) -> Side<'a> {
+    Side {
+        backend,
+        adapter,
+        with,
+        without,
+        friction: rough.as_mut().map(|s| s as &mut dyn Timed),
+    }
+}
+
+fn only(mut rows: Vec<ContactRow>) -> Result<ContactRow> {
+    rows.pop()
+        .ok_or_else(|| Error::Bench("a contact scene gave no row".into()))
+}
+
 /// Times the CPU reference on a contact scene of `size`: `rounds` rounds of `steps / rounds`
 /// steps with and without the scene's `[[contact]]`, alternating; with `friction`, also the
 /// scene with that Coulomb coefficient on its contacts and walls (a third variant).
@@ -1136,35 +1239,17 @@ fn contact_build(
 /// # Errors
 /// Scene errors, or [`Error::Bench`] when a run stops before it took all its steps.
 pub fn cpu_contact(which: ContactScene, size: usize, timing: &ContactTiming) -> Result<ContactRow> {
-    let (pile, friction) = (timing.pile, timing.friction);
-    let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
-    let plain = |mut solver: CpuSolver| {
-        if let Some(c) = solver.contact_mut() {
-            c.set_plain_sweeps(timing.plain_sweeps);
-        }
-        solver
-    };
-    let mut with = plain(CpuSolver::new(model.clone(), plan, schedule));
-    let (m, p, s) = contact_build(which, size, false, pile, None)?;
-    let mut without = plain(CpuSolver::new(m, p, s));
-    let mut rough = match friction {
-        Some(mu) => {
-            let (m, p, s) = contact_build(which, size, true, pile, Some(mu))?;
-            Some((mu, plain(CpuSolver::new(m, p, s))))
-        }
-        None => None,
-    };
-    contact_row(
+    let mut cpu = cpu_solvers(which, size, timing)?;
+    let model = cpu.0.clone();
+    let sides = vec![side("cpu", solver_adapter(), &mut cpu)];
+    only(contact_rows(
         which,
-        "cpu",
-        solver_adapter(),
         size,
         &model,
-        &mut with,
-        &mut without,
-        rough.as_mut().map(|(mu, s)| (*mu, s)),
+        sides,
+        timing.friction,
         timing,
-    )
+    )?)
 }
 
 /// Times the GPU of `ctx` on a contact scene of `size`, as [`cpu_contact`] (with
@@ -1179,35 +1264,40 @@ pub fn gpu_contact(
     size: usize,
     timing: &ContactTiming,
 ) -> Result<ContactRow> {
-    let (pile, friction) = (timing.pile, timing.friction);
-    let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
-    let options = crate::gpu::contact::ContactOptions {
-        plain_sweeps: timing.plain_sweeps,
-        ..Default::default()
-    };
-    let solver =
-        |m: &Model, p: &Plan, s| GpuSolver::with_options(ctx.clone(), m, p, s, None, options);
-    let mut with = solver(&model, &plan, schedule)?;
-    let (m, p, s) = contact_build(which, size, false, pile, None)?;
-    let mut without = solver(&m, &p, s)?;
-    let mut rough = match friction {
-        Some(mu) => {
-            let (m, p, s) = contact_build(which, size, true, pile, Some(mu))?;
-            Some((mu, solver(&m, &p, s)?))
-        }
-        None => None,
-    };
-    contact_row(
+    let mut gpu = gpu_solvers(&ctx, which, size, timing)?;
+    let model = gpu.0.clone();
+    let sides = vec![side("gpu", ctx.adapter_name(), &mut gpu)];
+    only(contact_rows(
         which,
-        "gpu",
-        ctx.adapter_name(),
         size,
         &model,
-        &mut with,
-        &mut without,
-        rough.as_mut().map(|(mu, s)| (*mu, s)),
+        sides,
+        timing.friction,
         timing,
-    )
+    )?)
+}
+
+/// Times the CPU reference and the GPU of `ctx` on a contact scene of `size` in the same
+/// alternating rounds (every variant of both, the order reversed every other round), so that
+/// the GPU row's [`ContactRow::vs_cpu`] compares the two under the same drift of the machine's
+/// speed; the CPU's row, then the GPU's.
+///
+/// # Errors
+/// As [`cpu_contact`] and [`gpu_contact`].
+pub fn both_contact(
+    ctx: Arc<GpuContext>,
+    which: ContactScene,
+    size: usize,
+    timing: &ContactTiming,
+) -> Result<Vec<ContactRow>> {
+    let mut gpu = gpu_solvers(&ctx, which, size, timing)?;
+    let mut cpu = cpu_solvers(which, size, timing)?;
+    let model = cpu.0.clone();
+    let sides = vec![
+        side("cpu", solver_adapter(), &mut cpu),
+        side("gpu", ctx.adapter_name(), &mut gpu),
+    ];
+    contact_rows(which, size, &model, sides, timing.friction, timing)
 }
 
 /// Formats contact rows as a table.
@@ -1228,6 +1318,10 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
         "read back [B/st]"
     );
     s.push_str(&format!(" {:>6}", "sweeps"));
+    let versus = rows.iter().any(|r| r.vs_cpu.is_some());
+    if versus {
+        s.push_str(&format!(" {:>7}", "vs CPU"));
+    }
     if rough {
         s.push_str(&format!(
             " {:>16} {:>18} {:>15}",
@@ -1249,6 +1343,12 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
             r.bytes_read_back_per_step
         ));
         s.push_str(&format!(" {:>6.1}", r.sweeps_mean));
+        if versus {
+            match r.vs_cpu {
+                Some(v) => s.push_str(&format!(" {v:>7.2}")),
+                None => s.push_str(&format!(" {:>7}", "-")),
+            }
+        }
         if rough {
             match (
                 r.friction_steps_per_second,
@@ -1265,6 +1365,12 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
     }
     if rows.iter().any(|r| r.plain_sweeps) {
         s.push_str("(plain projected Gauss-Seidel sweeps, not extrapolated)\n");
+    }
+    if versus {
+        s.push_str(
+            "(vs CPU: the steps with contact, CPU reference time over this backend's, median over \
+             rounds timed in alternation with the CPU's)\n",
+        );
     }
     s
 }

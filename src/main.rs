@@ -439,6 +439,22 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
                         friction,
                         plain_sweeps,
                     };
+                    if let (true, Some(ctx)) = (run_cpu, &ctx) {
+                        // Both backends in the same alternating rounds (the GPU row's ratio to
+                        // the CPU's); where that fails (a scene the GPU cannot run), apart.
+                        match ricochet::bench::both_contact(ctx.clone(), which, size, &timing) {
+                            Ok(rows) => {
+                                for row in rows {
+                                    let backend = row.backend.clone();
+                                    push(what(&backend), Ok(row));
+                                }
+                                continue;
+                            }
+                            Err(e) => {
+                                eprintln!("{}: the CPU and GPU apart: {e}", what("cpu and gpu"))
+                            }
+                        }
+                    }
                     if run_cpu {
                         let row = ricochet::bench::cpu_contact(which, size, &timing);
                         push(what("cpu"), row);

@@ -227,6 +227,44 @@ fn gpu_bench_reports_the_full_over_bare_ratio_and_the_contact_share_at_a_tiny_si
 }
 
 #[test]
+fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
+    // `--backend both`: the two backends' variants (with and without contact, and with friction)
+    // alternate in one set of rounds; the GPU row carries its speed over the CPU's, the CPU row
+    // none. How large the ratio is belongs in BENCHMARKS.md.
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let timing = ricochet::bench::ContactTiming {
+        steps: 8,
+        rounds: 2,
+        warmup: ricochet::bench::DEFAULT_WARMUP,
+        pile: ricochet::bench::PileContact::All,
+        friction: Some(0.3),
+        plain_sweeps: false,
+    };
+    let rows =
+        ricochet::bench::both_contact(ctx, ricochet::bench::ContactScene::Striker, 4, &timing)
+            .expect("bench rows");
+    let table = ricochet::bench::contact_table(&rows);
+    eprint!("{table}");
+    assert_eq!(rows.len(), 2);
+    assert_eq!(
+        (rows[0].backend.as_str(), rows[1].backend.as_str()),
+        ("cpu", "gpu")
+    );
+    for r in &rows {
+        assert_eq!((r.steps, r.rounds, r.elements, r.bodies), (8, 2, 96, 2));
+        assert!(r.steps_per_second > 0.0 && r.free_seconds > 0.0);
+        assert!(r.friction_steps_per_second.is_some_and(|f| f > 0.0));
+    }
+    assert_eq!(rows[0].vs_cpu, None);
+    let v = rows[1].vs_cpu.expect("the GPU row's ratio to the CPU");
+    assert!(v.is_finite() && v > 0.0, "vs_cpu = {v}");
+    assert_eq!(rows[0].bytes_read_back_per_step, 0.0);
+    assert!(rows[1].bytes_read_back_per_step > 0.0);
+    assert!(table.contains("vs CPU"));
+}
+
+#[test]
 fn a_model_beyond_the_adapters_largest_buffer_is_refused_up_front_naming_its_mesh() {
     // A block just large enough that its element buffer (64 bytes per element) exceeds this
     // adapter's largest storage binding: `run --backend gpu` exits 2 naming the mesh key and the
