@@ -1204,7 +1204,7 @@ fn gpu_solvers(
         GpuSolver::with_options(ctx.clone(), &m, &p, s, None, options)
     };
     let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
-    let with = GpuSolver::with_options(ctx.clone(), &model, &plan, schedule, None, options)?;
+    let with = solver((model.clone(), plan, schedule))?;
     let without = solver(contact_build(which, size, false, pile, None)?)?;
     let rough = match timing.friction {
         Some(mu) => Some(solver(contact_build(which, size, true, pile, Some(mu))?)?),
