@@ -11,6 +11,11 @@ const CG: u32 = 64u;                  // threads per workgroup of the per-item c
 // Threads of the one-workgroup contact kernels (plan, scans, the one-workgroup solve): 256 on
 // GPUs, 8 on CPU adapters (src/gpu/shader.rs Features::contact_group).
 const SG: u32 = 256u;
+// The contact methods of the scene (src/gpu/shader.rs Features): the code of a method that no
+// slot uses folds away when the kernels are compiled (lavapipe runs a branch that none of its
+// lanes takes under a mask).
+const SPRINGS: bool = true;           // penalty, perturbed or augmented Lagrangian slots
+const FRICTION: bool = true;          // slots with Coulomb friction
 const KIND_NONE: u32 = 0u;
 const KIND_LAGRANGE: u32 = 1u;
 const KIND_PENALTY: u32 = 2u;
@@ -298,7 +303,7 @@ fn pgs_update(k: u32, dt: f32, inv_scale: f32) -> f32 {
         cons[k].lambda = lambda;
     }
     var change = abs(d * c.w);
-    if (c.mu > 0.0) {
+    if (FRICTION && c.mu > 0.0) {
         // Coulomb (CPU: ContactSet::sweep): the tangential impulse that stops the relative
         // tangential velocity inside the cone |lt| <= mu lambda (stick), else on its edge.
         let t = tangent(c);

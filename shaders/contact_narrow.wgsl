@@ -315,7 +315,7 @@ fn penalty_friction(c0: Cons, sl: Slot, old: Cons, dt: f32, dtn: f32, inv_scale:
 // Friction of a Lagrange constraint of slot `sl` (no friction where no node can move along t).
 fn with_friction(c0: Cons, sl: Slot, inv_scale: f32) -> Cons {
     var c = c0;
-    if (sl.mu > 0.0 && c.kind == KIND_LAGRANGE) {
+    if (FRICTION && sl.mu > 0.0 && c.kind == KIND_LAGRANGE) {
         let t = tangent(c);
         var wt = along(sl.s, t, inv_scale);
         if (c.a != NONE) {
@@ -332,7 +332,7 @@ fn with_friction(c0: Cons, sl: Slot, inv_scale: f32) -> Cons {
 fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32) -> Cons {
     var c = no_constraint();
     let s = sl.s;
-    let penalty = (sl.info & SLOT_PENALTY) != 0u;
+    let penalty = SPRINGS && (sl.info & SLOT_PENALTY) != 0u;
     let t_own = x_n(sl.nn, sl.np);
     let own = vec2<f32>(t_own.y, -t_own.x);
     var found = false;
@@ -433,7 +433,7 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32) -> Con
     c.g0 = g_tr;
     c.w = w;
     c.sign = 1.0;
-    if ((sl.info & SLOT_PENALTY) == 0u) {
+    if (!SPRINGS || (sl.info & SLOT_PENALTY) == 0u) {
         if (g_tr < 0.0) {
             c.kind = KIND_LAGRANGE;
         }
@@ -476,17 +476,22 @@ fn narrow(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (!contact_running() || gid.x >= active_count()) {
         return;
     }
-    let k = active_slot(gid.x);
+    narrow_active(gid.x);
+}
+
+// The narrow phase of the j-th active slot.
+fn narrow_active(j: u32) {
+    let k = active_slot(j);
     let dt = ctrl.dt_next;
     let dtn = ctrl.dt_node;
     let old = cons[k];
     let sl = slots[k];
     var carried = 0.0;
-    if (sl.ar > 0.0 && old.kind == KIND_PENALTY) {
+    if (SPRINGS && sl.ar > 0.0 && old.kind == KIND_PENALTY) {
         carried = old.ft;
     }
     var c = narrow_slot(k, dt, dtn, inv_mass_scale(), carried);
-    if (c.kind == KIND_PENALTY && sl.mu > 0.0) {
+    if (SPRINGS && FRICTION && c.kind == KIND_PENALTY && sl.mu > 0.0) {
         c = penalty_friction(c, sl, old, dt, dtn, inv_mass_scale());
     }
     if (c.kind == KIND_LAGRANGE && old.kind == KIND_LAGRANGE && old.lambda > 0.0 && old.dt_warm > 0.0) {
@@ -509,6 +514,11 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (!contact_running() || i >= cc.p.n_local) {
         return;
     }
+    gather_node(i);
+}
+
+// `gather` of local node i.
+fn gather_node(i: u32) {
     let inv_scale = inv_mass_scale();
     var d = vec2<f32>(0.0);
     let b = cc.p.cand_capacity;

@@ -6,11 +6,9 @@
 // lane group, so the per-item kernels have one barrier each and the one-workgroup `report_end`
 // runs SG lanes (8 on CPU adapters).
 
-@group(0) @binding(13) var<storage, read_write> ws: array<u32>;
-@group(0) @binding(14) var<storage, read_write> grow: array<u32>;
+// Compiled after contact_narrow.wgsl (its bindings and active-slot list).
 
 var<workgroup> sh_f: array<vec4<f32>, CG>;
-var<workgroup> sh_r: array<vec4<f32>, CG>;
 var<workgroup> sh_e: array<vec4<f32>, SG>;   // report_end's trees
 var<workgroup> sh_er: array<vec4<f32>, SG>;
 var<workgroup> sh_ni: u32;
@@ -18,7 +16,7 @@ var<workgroup> sh_ni: u32;
 // First word of interface f in a history row: after the contact energy (and with friction the
 // friction work), 4 words each (fx, fy, penetration, active), 5 with friction (and ft).
 fn hist_word(f: u32) -> u32 {
-    if (cc.p.friction != 0u) {
+    if (FRICTION && cc.p.friction != 0u) {
         return 2u + 5u * f;
     }
     return 1u + 4u * f;
@@ -35,44 +33,7 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocati
     let running = contact_running();
     var work = vec4<f32>(0.0);
     if (running && i < cc.p.n_local) {
-        let moving = (ctrl.flags & FLAG_END) == 0u;
-        let sample = (ctrl.flags & FLAG_SAMPLE) != 0u;
-        let dt = ctrl.dt_next;
-        let vl = vel(i);
-        let d = dv(i);
-        var vn = vl.xy + d;
-        if (d.x != 0.0 || d.y != 0.0) {
-            let g = c_nodes[i].x;
-            // The correction joins node.wgsl's compensated sum: v + (d + residual), and the new
-            // residual (`cc.p.one` keeps a reassociating compiler from folding it to 0).
-            let y = d + v_prev[cc.p.n_nodes + g];
-            vn = vl.xy + y;
-            v_prev[cc.p.n_nodes + g] = y - (vn - vl.xy * cc.p.one);
-        }
-        c_pv[3u * i + 2u] = vec4<f32>(vn, d);
-        if (d.x != 0.0 || d.y != 0.0) {
-            let g = c_nodes[i].x;
-            let m = bitcast<f32>(c_nodes[i].y);
-            let mu = (1.0 + ctrl.damp_c) * m;
-            let j = vec2<f32>(select(0.0, mu * d.x, c_ref[i].z > 0.0), select(0.0, mu * d.y, c_ref[i].w > 0.0));
-            work = vec4<f32>(0.5 * dot(j, vl.zw + vn), 0.5 * dot(j, vn), 0.0, 0.0);
-            var s = nodes[g];
-            if (moving) {
-                // (The displacement's compensated sum of node.wgsl.)
-                let ru = 2u * cc.p.n_nodes + g;
-                let yu = dt * d + v_prev[ru];
-                let un = s.xy + yu;
-                v_prev[ru] = yu - (un - s.xy * cc.p.one);
-                s = vec4<f32>(un, vn);
-            } else {
-                s = vec4<f32>(s.xy, vn);
-            }
-            nodes[g] = s;
-            if (sample) {
-                let vq = v_prev[g];
-                sample_src[g] = vec4<f32>(0.5 * m * dot(vq, vn), 0.5 * m * (vq + vn), 0.0);
-            }
-        }
+        work = finish_node(i);
     }
     sh_f[l] = work;
     workgroupBarrier();
@@ -83,6 +44,50 @@ fn finish(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocati
         }
         fws[cc.p.f_wp + wid.x] = t;
     }
+}
+
+// `finish` of local node i; returns its impulses' work.
+fn finish_node(i: u32) -> vec4<f32> {
+    var work = vec4<f32>(0.0);
+    let moving = (ctrl.flags & FLAG_END) == 0u;
+    let sample = (ctrl.flags & FLAG_SAMPLE) != 0u;
+    let dt = ctrl.dt_next;
+    let vl = vel(i);
+    let d = dv(i);
+    var vn = vl.xy + d;
+    if (d.x != 0.0 || d.y != 0.0) {
+        let g = c_nodes[i].x;
+        // The correction joins node.wgsl's compensated sum: v + (d + residual), and the new
+        // residual (`cc.p.one` keeps a reassociating compiler from folding it to 0).
+        let y = d + v_prev[cc.p.n_nodes + g];
+        vn = vl.xy + y;
+        v_prev[cc.p.n_nodes + g] = y - (vn - vl.xy * cc.p.one);
+    }
+    c_pv[3u * i + 2u] = vec4<f32>(vn, d);
+    if (d.x != 0.0 || d.y != 0.0) {
+        let g = c_nodes[i].x;
+        let m = bitcast<f32>(c_nodes[i].y);
+        let mu = (1.0 + ctrl.damp_c) * m;
+        let j = vec2<f32>(select(0.0, mu * d.x, c_ref[i].z > 0.0), select(0.0, mu * d.y, c_ref[i].w > 0.0));
+        work = vec4<f32>(0.5 * dot(j, vl.zw + vn), 0.5 * dot(j, vn), 0.0, 0.0);
+        var s = nodes[g];
+        if (moving) {
+            // (The displacement's compensated sum of node.wgsl.)
+            let ru = 2u * cc.p.n_nodes + g;
+            let yu = dt * d + v_prev[ru];
+            let un = s.xy + yu;
+            v_prev[ru] = yu - (un - s.xy * cc.p.one);
+            s = vec4<f32>(un, vn);
+        } else {
+            s = vec4<f32>(s.xy, vn);
+        }
+        nodes[g] = s;
+        if (sample) {
+            let vq = v_prev[g];
+            sample_src[g] = vec4<f32>(0.5 * m * dot(vq, vn), 0.5 * m * (vq + vn), 0.0);
+        }
+    }
+    return work;
 }
 
 fn interface_of(k: u32) -> u32 {
@@ -138,15 +143,6 @@ fn slot_friction(k: u32) -> vec4<f32> {
     return vec4<f32>(c.lt, before + after, after, 0.0);
 }
 
-// The active slots of the last search (contact_narrow.wgsl): only they can have a constraint.
-fn active_count() -> u32 {
-    return ws[cc.p.o_aoff + cc.p.n_slots];
-}
-
-fn active_slot(j: u32) -> u32 {
-    return ws[cc.p.o_alist + j];
-}
-
 // Where interface f's active slots begin in the active list (f = n_ifaces: the count).
 fn active_begin(f: u32) -> u32 {
     return ws[cc.p.o_aoff + ws[cc.p.o_iface + f]];
@@ -159,29 +155,37 @@ fn active_begin(f: u32) -> u32 {
 @compute @workgroup_size(CG)
 fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
     let j = gid.x;
-    let l = lid.x;
     // (No early return before the barrier: the kernel runs on when contact is not running,
     // doing nothing.)
     let running = contact_running();
-    let dt = ctrl.dt_next;
-    let friction = cc.p.friction != 0u;
     let na = select(0u, active_count(), running);
     if (j < na) {
-        let k = active_slot(j);
-        sh_f[l] = slot_report(k, dt);
-        let c = cons[k];
-        if (c.kind == KIND_PENALTY && c.dt_warm < 0.0) {
-            atomicAdd(&cc.bounded, 1u);
-        }
-        if (friction) {
-            sh_r[l] = slot_friction(k);
-        }
+        report_item(j);
     }
-    workgroupBarrier();
-    if (l != 0u) {
-        return;
+    storageBarrier();
+    if (lid.x == 0u && j < na) {
+        report_runs(j, min(CG, na - j));
     }
-    let n = min(CG, na - min(j, na));
+}
+
+// Active slot j's report (and friction) into fws[f_rp + j] (and fws[f_rf + j]), for
+// `report_runs`; the bounded penalty impulses counted.
+fn report_item(j: u32) {
+    let k = active_slot(j);
+    fws[cc.p.f_rp + j] = slot_report(k, ctrl.dt_next);
+    let c = cons[k];
+    if (c.kind == KIND_PENALTY && c.dt_warm < 0.0) {
+        atomicAdd(&cc.bounded, 1u);
+    }
+    if (FRICTION && cc.p.friction != 0u) {
+        fws[cc.p.f_rf + j] = slot_friction(k);
+    }
+}
+
+// The runs of the n items from active position j (`report_item`), summed in order, each into its
+// first item's place.
+fn report_runs(j: u32, n: u32) {
+    let friction = FRICTION && cc.p.friction != 0u;
     var start = j;
     var acc = vec4<f32>(0.0);
     var accf = vec4<f32>(0.0);
@@ -200,10 +204,10 @@ fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
             acc = vec4<f32>(0.0);
             accf = vec4<f32>(0.0);
         }
-        let r = sh_f[q];
+        let r = fws[cc.p.f_rp + j + q];
         acc = vec4<f32>(acc.xyz + r.xyz, max(acc.w, r.w));
         if (friction) {
-            accf += sh_r[q];
+            accf += fws[cc.p.f_rf + j + q];
         }
     }
     if (f != NONE) {
@@ -238,6 +242,11 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (!running_uniform(l)) {
         return;
     }
+    report_end_step(l);
+}
+
+// `report_end`'s work, by invocation l of its workgroup.
+fn report_end_step(l: u32) {
     let sample = (ctrl.flags & FLAG_SAMPLE) != 0u;
     let dtn = ctrl.dt_node;
     let row = (ctrl.rows % cc.p.row_capacity) * cc.p.hist_stride;
@@ -245,7 +254,7 @@ fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
         sh_ni = cc.p.n_ifaces;
     }
     let ni = workgroupUniformLoad(&sh_ni);
-    let friction = cc.p.friction != 0u;
+    let friction = FRICTION && cc.p.friction != 0u;
     // With friction: the friction work of the step over all interfaces (lane 0), in order.
     var fwork = vec2<f32>(0.0);
     for (var f = 0u; f < ni; f++) {

@@ -33,6 +33,11 @@ fn prep(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (!contact_running() || i >= cc.p.n_local) {
         return;
     }
+    prep_node(i);
+}
+
+// `prep` of local node i.
+fn prep_node(i: u32) {
     let dt = ctrl.dt_next;
     let moving = (ctrl.flags & FLAG_END) == 0u;
     let s = nodes[c_nodes[i].x];
@@ -77,6 +82,29 @@ fn plan() {
     if (!contact_running()) {
         return;
     }
+    plan_step();
+}
+
+// `prep` and `plan` in one workgroup (the one-workgroup contact stage, contact_one.wgsl): one
+// dispatch where they take two.
+@compute @workgroup_size(SG)
+fn prep_one(@builtin(local_invocation_id) lid: vec3<u32>) {
+    let l = lid.x;
+    if (!running_uniform(l)) {
+        return;
+    }
+    let n = cc.p.n_local;
+    for (var i = l; i < n; i += SG) {
+        prep_node(i);
+    }
+    storageBarrier();
+    if (l == 0u) {
+        plan_step();
+    }
+}
+
+// `plan`'s work.
+fn plan_step() {
     let due = atomicExchange(&cc.due, 0u) != 0u;
     let f = select(0u, 1u, due);
     set_ind(0u, f * groups(max(max(cc.p.n_segs, cc.p.n_buckets), max(cc.p.n_local, cc.p.n_slots))));

@@ -197,7 +197,7 @@ fn pack(l: u32) {
         ws[at + 2u] = packed_index(c.b, nn);
         fws[cc.p.f_row + 2u * q] = vec4<f32>(c.n, c.g0, c.w);
         fws[cc.p.f_row + 2u * q + 1u] = vec4<f32>(c.lambda, c.lt, c.xi, c.mu);
-        if (c.mu > 0.0) {
+        if (FRICTION && c.mu > 0.0) {
             fws[cc.p.f_frow + q] = vec4<f32>(c.wt, free_relative_along(c, s, tangent(c)), 0.0, 0.0);
         }
     }
@@ -249,7 +249,7 @@ fn pgs_packed(q: u32, dt: f32, inv_scale: f32, dummy: u32) -> f32 {
         moved = true;
     }
     var change = abs(d * r0.w);
-    if (r1.w > 0.0) {
+    if (FRICTION && r1.w > 0.0) {
         // Coulomb, as in pgs_update.
         let fr = fws[cc.p.f_frow + q];
         let t = vec2<f32>(-n.y, n.x);
@@ -401,7 +401,7 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
 // whether it now has a constraint.
 fn recheck_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> bool {
     let sl = slots[k];
-    if (cons[k].kind != KIND_NONE || (sl.info & SLOT_PENALTY) != 0u) {
+    if (cons[k].kind != KIND_NONE || (SPRINGS && (sl.info & SLOT_PENALTY) != 0u)) {
         return false;
     }
     corr_dt = dt;
@@ -435,6 +435,11 @@ fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (!running_uniform(l)) {
         return;
     }
+    solve_step(l);
+}
+
+// `solve_one`'s work, by invocation l of its workgroup.
+fn solve_step(l: u32) {
     if (l == 0u) {
         sh_split = cc.p.split;
         // Unsplit, the one dispatch is round 0.

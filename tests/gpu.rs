@@ -77,6 +77,56 @@ fn variants_compile_only_what_the_scene_needs() {
         },
     );
     assert!(diss.contains("elem_state"));
+    // Only the material models, formulations and hourglass forms of the scene's bodies.
+    let linear = shader::source(
+        ricochet::gpu::element::SOURCE,
+        Features {
+            neo_hookean: false,
+            plane_stress: false,
+            hourglass_stiffness: false,
+            ..Features::default()
+        },
+    );
+    assert!(linear.contains("b.lambda_plane * tr"));
+    assert!(
+        !linear.contains("jf_cof") && !linear.contains("let stiffness = b.hourglass"),
+        "no neo-Hookean branch nor stiffness hourglass in a linear elastic scene"
+    );
+    assert!(!linear.contains("let axi = b.formulation"));
+    let rubber = shader::source(
+        ricochet::gpu::element::SOURCE,
+        Features {
+            linear_elastic: false,
+            plane_stress: false,
+            ..Features::default()
+        },
+    );
+    assert!(rubber.contains("jf_cof") && !rubber.contains("b.lambda_plane * tr"));
+    assert!(
+        !rubber.contains("for (var it = 0; it < 6; it++)"),
+        "no plane stress iteration in a plane strain scene"
+    );
+    // Only the contact methods of the scene's contacts and walls.
+    let contact = |springs: bool, friction: bool| {
+        ricochet::gpu::contact::stage_source(
+            &[ricochet::gpu::contact::narrow::SOURCE],
+            Features {
+                contact_springs: springs,
+                contact_friction: friction,
+                ..Features::default()
+            },
+        )
+    };
+    let lagrange = contact(false, false);
+    assert!(
+        lagrange.contains("const SPRINGS: bool = false;")
+            && lagrange.contains("const FRICTION: bool = false;")
+    );
+    let rough = contact(true, true);
+    assert!(
+        rough.contains("const SPRINGS: bool = true;")
+            && rough.contains("const FRICTION: bool = true;")
+    );
     let node = shader::source(ricochet::gpu::node::SOURCE, Features::default());
     assert!(
         !node.contains("u_snap"),

@@ -73,21 +73,19 @@ impl Kernels {
             }
             s
         };
-        vec![
-            ("contact_search", c(&[contact::search::SOURCE])),
-            ("contact_narrow", c(&[contact::narrow::SOURCE])),
-            (
-                "contact_solve",
-                c(&[contact::narrow::SOURCE, contact::solve::SOURCE]),
-            ),
-            ("contact_report", c(&[contact::report::SOURCE])),
+        let mut v: Vec<(&'static str, String)> = contact::MODULES
+            .iter()
+            .map(|(label, parts)| (*label, c(parts)))
+            .collect();
+        v.extend([
             ("loads", loads::SOURCE.into()),
             ("element", element::SOURCE.into()),
             ("node", node::SOURCE.into()),
             ("boundary", boundary::SOURCE.into()),
             ("reduce", reduce::SOURCE.into()),
             ("control", control::SOURCE.into()),
-        ]
+        ]);
+        v
     }
 }
 

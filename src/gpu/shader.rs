@@ -19,8 +19,22 @@ pub struct Features {
     pub loads: bool,
     /// J2 plastic bodies: the element stage keeps a plastic state per element.
     pub plastic: bool,
-    /// Axisymmetric bodies: the dissipative element state keeps the hoop bulk stress.
+    /// Axisymmetric bodies: the element stage's hoop terms, and the dissipative element state
+    /// keeps the hoop bulk stress.
     pub axisymmetric: bool,
+    /// Linear elastic bodies: the element stage's small-strain branch.
+    pub linear_elastic: bool,
+    /// Neo-Hookean bodies: the element stage's hyperelastic branch.
+    pub neo_hookean: bool,
+    /// Plane stress bodies: the neo-Hookean branch's Newton iteration for the out-of-plane
+    /// stretch.
+    pub plane_stress: bool,
+    /// Bodies with the stiffness hourglass form.
+    pub hourglass_stiffness: bool,
+    /// Contacts or walls by penalty, perturbed or augmented Lagrangian (WGSL `SPRINGS`).
+    pub contact_springs: bool,
+    /// Contacts or walls with Coulomb friction (WGSL `FRICTION`).
+    pub contact_friction: bool,
     /// Threads per workgroup of the reductions and control kernels (WGSL `RG`): 256 on GPUs,
     /// 64 on CPU adapters such as lavapipe, where each barrier costs a coroutine switch per lane group.
     pub reduce_group: u32,
@@ -38,6 +52,12 @@ impl Default for Features {
             loads: false,
             plastic: false,
             axisymmetric: false,
+            linear_elastic: true,
+            neo_hookean: true,
+            plane_stress: true,
+            hourglass_stiffness: true,
+            contact_springs: true,
+            contact_friction: true,
             reduce_group: 256,
             contact_group: 256,
         }
@@ -52,6 +72,10 @@ impl Features {
             "loads" => self.loads,
             "plastic" => self.plastic,
             "axisymmetric" => self.axisymmetric,
+            "linear_elastic" => self.linear_elastic,
+            "neo_hookean" => self.neo_hookean,
+            "plane_stress" => self.plane_stress,
+            "hourglass_stiffness" => self.hourglass_stiffness,
             _ => false,
         }
     }
@@ -64,15 +88,23 @@ impl Features {
                 for loads in [false, true] {
                     for (plastic, axisymmetric) in [(false, false), (true, true)] {
                         for (reduce_group, contact_group) in [(64, 8), (256, 256)] {
-                            v.push(Features {
-                                dissipation,
-                                fields,
-                                loads,
-                                plastic,
-                                axisymmetric,
-                                reduce_group,
-                                contact_group,
-                            });
+                            for elastic in [false, true] {
+                                v.push(Features {
+                                    dissipation,
+                                    fields,
+                                    loads,
+                                    plastic,
+                                    axisymmetric,
+                                    linear_elastic: elastic,
+                                    neo_hookean: elastic,
+                                    plane_stress: elastic,
+                                    hourglass_stiffness: elastic,
+                                    contact_springs: elastic,
+                                    contact_friction: elastic,
+                                    reduce_group,
+                                    contact_group,
+                                });
+                            }
                         }
                     }
                 }
@@ -88,7 +120,7 @@ pub fn source(kernel: &str, features: Features) -> String {
     out.push_str(COMMON);
     out.push('\n');
     let mut keep = vec![true];
-    for line in kernel.lines() {
+    'lines: for line in kernel.lines() {
         let t = line.trim();
         if let Some(name) = t.strip_prefix("//#if ") {
             let outer = *keep.last().unwrap_or(&true);
@@ -117,6 +149,16 @@ pub fn source(kernel: &str, features: Features) -> String {
             if t == "const SG: u32 = 256u;" {
                 out.push_str(&format!("const SG: u32 = {}u;\n", features.contact_group));
                 continue;
+            }
+            for (name, on) in [
+                ("SPRINGS", features.contact_springs),
+                ("FRICTION", features.contact_friction),
+            ] {
+                if t.starts_with(&format!("const {name}: bool = true;")) {
+                    out.push_str(&line.replacen("true", if on { "true" } else { "false" }, 1));
+                    out.push('\n');
+                    continue 'lines;
+                }
             }
             out.push_str(line);
             out.push('\n');

@@ -130,6 +130,8 @@ impl GpuSolver {
         contact: ContactOptions,
     ) -> Result<Self> {
         let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
+        let any = |f: &dyn Fn(&crate::model::BodyModel) -> bool| model.bodies.iter().any(f);
+        use crate::scene::{ContactMethod, Formulation, HourglassForm, MaterialModel};
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -137,10 +139,21 @@ impl GpuSolver {
                 || plan.has(Stage::MassDamping)
                 || plan.has(Stage::Gravity),
             plastic: model.has_plasticity(),
-            axisymmetric: model
-                .bodies
+            axisymmetric: any(&|b| b.params.formulation == Formulation::Axisymmetric),
+            linear_elastic: any(&|b| b.params.model == MaterialModel::LinearElastic),
+            neo_hookean: any(&|b| b.params.model == MaterialModel::NeoHookean),
+            plane_stress: any(&|b| b.params.formulation == Formulation::PlaneStress),
+            hourglass_stiffness: any(&|b| b.params.hourglass == HourglassForm::Stiffness),
+            contact_springs: model
+                .contacts
                 .iter()
-                .any(|b| b.params.formulation == crate::scene::Formulation::Axisymmetric),
+                .any(|c| c.method != ContactMethod::Lagrange)
+                || model
+                    .walls
+                    .iter()
+                    .any(|w| w.method != ContactMethod::Lagrange),
+            contact_friction: model.contacts.iter().any(|c| c.friction > 0.0)
+                || model.walls.iter().any(|w| w.friction > 0.0),
             reduce_group: if cpu_adapter { 64 } else { 256 },
             contact_group: contact
                 .group

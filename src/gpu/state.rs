@@ -519,12 +519,12 @@ impl GpuState {
 
         let contact = match (contact_set, &kernels.contact) {
             (Some(set), Some(p)) => {
-                let multi = contact
-                    .multi
-                    .unwrap_or_else(|| super::contact::multi_path(set.slot_count(), device_type));
-                let split = contact
-                    .split
-                    .unwrap_or_else(|| super::contact::split_path(set.slot_count(), device_type));
+                let path = super::contact::Path::choose(
+                    &contact,
+                    set.tables().nodes.len(),
+                    set.slot_count(),
+                    device_type,
+                )?;
                 Some(ContactState::new(
                     device,
                     p,
@@ -537,9 +537,7 @@ impl GpuState {
                         sample_src: &sample_src,
                     },
                     row_cap,
-                    multi,
-                    split,
-                    !contact.plain_sweeps,
+                    path,
                     contact.candidate_capacity,
                     &mut a,
                 )?)

@@ -331,6 +331,103 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
     }
 }
 
+/// The contact stage in one workgroup before the search and one after it (the CPU adapters' path
+/// for small contact sets, `contact::one`) against the per-item kernels, on the pile (Lagrange
+/// between the disks and on the wall), on the pile with Coulomb friction and a penalty wall (the
+/// gather of penalty impulses, the friction reports) and on the striker whose re-checks add
+/// constraints. The same items and sums in the same order: the same bits on lavapipe; on a
+/// hardware adapter, which may contract multiply-adds differently per kernel, within
+/// [`solve_accuracy`]. Either path gives the same bits on a second run.
+#[test]
+fn gpu_one_workgroup_contact_stage_matches_the_per_item_kernels() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let pile = asset_path("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
+    let (head, wall) = pile.split_at(pile.find("[[rigid_wall]]").expect("the pile has a wall"));
+    let rough = format!(
+        "{}{}",
+        head.replace(
+            "method = \"lagrange\"",
+            "method = \"lagrange\"\nfriction = 0.3"
+        ),
+        wall.replace(
+            "method = \"lagrange\"",
+            "method = \"penalty\"\nfriction = 0.3"
+        )
+    );
+    assert!(rough.contains("penalty") && rough.matches("friction = 0.3").count() == 2);
+    let striker = asset_path("stress/striker_plate_gpu_energy.toml");
+    for (name, text) in [("pile", pile), ("rough pile", rough), ("striker", striker)] {
+        let with = |one: bool| ContactOptions {
+            multi: Some(false),
+            split: Some(false),
+            one: Some(one),
+            ..ContactOptions::default()
+        };
+        let (r1, model, u1, _) = run_gpu_with(&ctx, &text, &format!("{name}-items"), with(false));
+        let (r2, _, u2, _) = run_gpu_with(&ctx, &text, &format!("{name}-one"), with(true));
+        let (r3, _, u3, _) = run_gpu_with(&ctx, &text, &format!("{name}-one2"), with(true));
+        let (du, umax) = compare::displacement_difference(&u1, &u2);
+        let (de, ke0) = compare::energy_difference(&r1, &r2);
+        let same = history_bits(&r1) == history_bits(&r2)
+            && displacement_bits(&u1) == displacement_bits(&u2);
+        let active = r1
+            .samples
+            .iter()
+            .map(|(s, _)| s.contacts.iter().map(|c| c.active_nodes).sum::<u32>())
+            .max()
+            .unwrap_or(0);
+        println!(
+            "{name}: {} steps, sweeps mean {:.2}, up to {active} active nodes; one workgroup \
+             against the per-item kernels: same bits {same}, |du| {du:.2e} of {umax:.2e} m, \
+             energies {de:.2e} of {ke0:.2e} J",
+            r1.summary.steps, r1.summary.contact_sweeps_mean,
+        );
+        assert!(active > 0, "{name}: contact happened");
+        assert!(r1.summary.contact_sweeps_max > 0, "{name}: the solve ran");
+        assert_eq!(
+            history_bits(&r2),
+            history_bits(&r3),
+            "{name}: two one-workgroup runs differ"
+        );
+        assert_eq!(
+            displacement_bits(&u2),
+            displacement_bits(&u3),
+            "{name}: two one-workgroup runs differ"
+        );
+        assert_eq!(r1.samples.len(), r2.samples.len());
+        if ctx.is_software() {
+            assert!(
+                same,
+                "{name}: one workgroup and per-item kernels differ on {}",
+                ctx.adapter_name()
+            );
+        }
+        let accuracy = solve_accuracy(&model);
+        assert!(
+            du <= accuracy,
+            "{name}: displacements differ by {du:e} m (solve accuracy {accuracy:e} m)"
+        );
+        assert!(de <= 1e-5 * ke0, "{name}: energies differ by {de:e} J");
+    }
+    // One workgroup takes neither the per-colour solve nor split re-checks.
+    let (scene, model, plan) = load(&asset_path("pile.toml"), "pile.toml");
+    for (multi, split) in [(true, false), (false, true)] {
+        let options = ContactOptions {
+            multi: Some(multi),
+            split: Some(split),
+            one: Some(true),
+            ..ContactOptions::default()
+        };
+        let err =
+            GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
+                .err()
+                .map(|e| e.to_string())
+                .unwrap_or_default();
+        assert!(err.contains("one workgroup"), "{err}");
+    }
+}
+
 /// The one-workgroup contact kernels (the search's scans, the solve, the reports' end) at 8, 64
 /// and 256 threads: 8 is the CPU adapters' size and 256 the GPUs' (`contact::one_group`), so this
 /// runs the GPUs' size on lavapipe too. The scans sum integers and a colour's constraints share no

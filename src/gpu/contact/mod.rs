@@ -8,7 +8,9 @@
 //! - [`narrow`]: each active slot's constraint, the penalty impulses and the Lagrange warm starts;
 //! - [`solve`]: the diagonal-mass Lagrange correction (projected Gauss-Seidel by colours, in one
 //!   workgroup or one dispatch per colour) and the active-set update;
-//! - [`report`]: corrected velocities, u_{n+1}, the impulses' work and the interface reports.
+//! - [`report`]: corrected velocities, u_{n+1}, the impulses' work and the interface reports;
+//! - [`one`]: on CPU adapters with a small contact set, the stage in two one-workgroup dispatches
+//!   (before and after the search) instead of eight.
 //!
 //! Every kernel binds the one bind group built here (one explicit layout). The host reads back
 //! only the contact counters with each batch's control block; a search that needs more candidate
@@ -18,6 +20,7 @@
 #![allow(missing_docs)]
 
 pub mod narrow;
+pub mod one;
 pub mod report;
 pub mod search;
 pub mod solve;
@@ -241,6 +244,8 @@ pub struct ContactKernels {
     finish: wgpu::ComputePipeline,
     report_slots: wgpu::ComputePipeline,
     report_end: wgpu::ComputePipeline,
+    prep_one: wgpu::ComputePipeline,
+    contact_one: wgpu::ComputePipeline,
 }
 
 fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
@@ -268,6 +273,18 @@ fn uniform_entry(binding: u32, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
         count: None,
     }
 }
+
+/// The contact shader modules: each one's label and stage files (after contact_common.wgsl).
+pub const MODULES: [(&str, &[&str]); 5] = [
+    ("contact_search", &[search::SOURCE]),
+    ("contact_narrow", &[narrow::SOURCE]),
+    ("contact_solve", &[narrow::SOURCE, solve::SOURCE]),
+    ("contact_report", &[narrow::SOURCE, report::SOURCE]),
+    (
+        "contact_one",
+        &[narrow::SOURCE, solve::SOURCE, report::SOURCE, one::SOURCE],
+    ),
+];
 
 /// The complete source of a contact stage: common.wgsl, contact_common.wgsl, then `parts`.
 pub fn stage_source(parts: &[&str], features: Features) -> String {
@@ -309,10 +326,8 @@ impl ContactKernels {
                 source: wgpu::ShaderSource::Wgsl(Cow::Owned(stage_source(parts, features))),
             })
         };
-        let search_m = module("contact_search", &[search::SOURCE]);
-        let narrow_m = module("contact_narrow", &[narrow::SOURCE]);
-        let solve_m = module("contact_solve", &[narrow::SOURCE, solve::SOURCE]);
-        let report_m = module("contact_report", &[report::SOURCE]);
+        let [search_m, narrow_m, solve_m, report_m, one_m] =
+            MODULES.map(|(label, parts)| module(label, parts));
         let pipe = |m: &wgpu::ShaderModule, layout: &wgpu::PipelineLayout, entry: &str| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
@@ -340,6 +355,8 @@ impl ContactKernels {
             finish: pipe(&report_m, &main, "finish"),
             report_slots: pipe(&report_m, &main, "report_slots"),
             report_end: pipe(&report_m, &main, "report_end"),
+            prep_one: pipe(&search_m, &with_ind, "prep_one"),
+            contact_one: pipe(&one_m, &main, "contact_one"),
             layout,
             ind_layout,
         }
@@ -436,6 +453,8 @@ pub struct ContactState {
     ind_bind: wgpu::BindGroup,
     /// Grow events so far (candidate buffer, colours recorded, colouring rounds).
     pub grows: u32,
+    /// The stage in one workgroup before the search and one after it ([`one`]).
+    one: bool,
 }
 
 fn make_bind(
@@ -479,6 +498,11 @@ pub struct ContactOptions {
     /// and the striker test's displacements differ by 1.5e-7 m: about as far as either path
     /// lies from the f64 CPU reference.
     pub split: Option<bool>,
+    /// The contact stage in one workgroup before the search and one after it (`Some(true)`;
+    /// the one-workgroup solve with its re-checks inside), or the per-item kernels
+    /// (`Some(false)`); `None`: [`one::one_path`] where neither `multi` nor `split` is asked
+    /// for. The same bits either way.
+    pub one: Option<bool>,
     /// Plain projected Gauss-Seidel sweeps on the one-workgroup path (`true`) instead of the
     /// extrapolated ones (the default, as on the CPU reference); for comparisons.
     pub plain_sweeps: bool,
@@ -504,6 +528,57 @@ pub fn one_group(device_type: wgpu::DeviceType) -> u32 {
     }
 }
 
+/// How a scene's contact stage is solved and dispatched.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Path {
+    /// The per-colour solve path (else one workgroup).
+    pub multi: bool,
+    /// On the one-workgroup path, the re-checks as their own dispatches.
+    pub split: bool,
+    /// On the one-workgroup path, extrapolated sweeps.
+    pub extrapolate: bool,
+    /// The stage in one workgroup before the search and one after it ([`one`]).
+    pub one: bool,
+}
+
+impl Path {
+    /// The path `options` ask for, the rest by [`multi_path`], [`split_path`] and
+    /// [`one::one_path`] for `nodes` contact nodes and `slots` slots.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when `options` ask for one workgroup with the per-colour path or split
+    /// re-checks.
+    pub fn choose(
+        options: &ContactOptions,
+        nodes: usize,
+        slots: usize,
+        device_type: wgpu::DeviceType,
+    ) -> Result<Path> {
+        let multi = options
+            .multi
+            .unwrap_or_else(|| multi_path(slots, device_type));
+        let split = options
+            .split
+            .unwrap_or_else(|| split_path(slots, device_type));
+        let one = options
+            .one
+            .unwrap_or_else(|| !multi && !split && one::one_path(nodes, device_type));
+        if one && (multi || split) {
+            return Err(Error::Gpu(
+                "the contact stage in one workgroup takes neither the per-colour solve nor split \
+                 re-checks"
+                    .into(),
+            ));
+        }
+        Ok(Path {
+            multi,
+            split,
+            extrapolate: !options.plain_sweeps,
+            one,
+        })
+    }
+}
+
 /// Whether the per-colour path is used for `slots` slots on an adapter of `device_type`.
 pub fn multi_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
     device_type != wgpu::DeviceType::Cpu && slots >= solve::MULTI_SLOTS
@@ -517,9 +592,7 @@ pub fn split_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
 
 impl ContactState {
     /// Buffers of `set` (the model's contacts); `alloc` records each buffer for the plan report.
-    /// `multi`: the per-colour solve path (else one workgroup); `split`: on the one-workgroup
-    /// path, the re-checks as their own dispatches; `extrapolate`: on the one-workgroup path,
-    /// extrapolated sweeps.
+    /// `path`: the solve path and how the stage is dispatched.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
         device: &wgpu::Device,
@@ -528,12 +601,16 @@ impl ContactState {
         set: ContactSet,
         shared: Shared<'_>,
         row_capacity: u32,
-        multi: bool,
-        split: bool,
-        extrapolate: bool,
+        path: Path,
         candidate_capacity: Option<u32>,
         alloc: &mut Alloc<'_>,
     ) -> Result<ContactState> {
+        let Path {
+            multi,
+            split,
+            extrapolate,
+            one,
+        } = path;
         let t = set.tables();
         let nl = t.nodes.len();
         let c_ref: Vec<[f32; 4]> = t
@@ -772,6 +849,7 @@ impl ContactState {
             bind,
             ind_bind,
             grows: 0,
+            one,
         })
     }
 
@@ -795,6 +873,11 @@ impl ContactState {
         self.params.multi != 0
     }
 
+    /// Whether the stage runs in one workgroup before the search and one after it ([`one`]).
+    pub fn one(&self) -> bool {
+        self.one
+    }
+
     /// Broad-phase searches so far (as last read back).
     pub fn searches(&self) -> u64 {
         self.counters.searches as u64
@@ -808,7 +891,9 @@ impl ContactState {
     /// Records the parts of the contact stage named by `parts` (a mask of [`PART_PREP`],
     /// [`PART_SEARCH`], [`PART_NARROW`], [`PART_SOLVE`], [`PART_REPORT`]), in stage order: the
     /// whole stage with [`PART_ALL`]; one part alone only for timing its kernels (the bench's
-    /// contact shares), since alone it works on whatever the other parts left.
+    /// contact shares), since alone it works on whatever the other parts left. In one
+    /// workgroup ([`ContactState::one`]) the narrow part is the whole stage after the search,
+    /// and the solve and report parts record nothing.
     pub fn record_parts(&self, k: &ContactKernels, pass: &mut wgpu::ComputePass<'_>, parts: u32) {
         let p = &self.params;
         let g = |n: u32| n.div_ceil(CG).max(1);
@@ -824,8 +909,12 @@ impl ContactState {
         bind(pass, 0);
         pass.set_bind_group(1, &self.ind_bind, &[]);
         if parts & PART_PREP != 0 {
-            direct(pass, &k.prep, g(p.n_local));
-            direct(pass, &k.plan, 1);
+            if self.one {
+                direct(pass, &k.prep_one, 1);
+            } else {
+                direct(pass, &k.prep, g(p.n_local));
+                direct(pass, &k.plan, 1);
+            }
         }
         for (e, pl) in k.search.iter().enumerate() {
             if parts & PART_SEARCH == 0 {
@@ -850,6 +939,13 @@ impl ContactState {
             }
             pass.set_pipeline(pl);
             pass.dispatch_workgroups_indirect(&self.ind, 12 * e as u64);
+        }
+        if self.one {
+            // Narrow phase to reports in one dispatch (timed as the narrow part).
+            if parts & PART_NARROW != 0 {
+                direct(pass, &k.contact_one, 1);
+            }
+            return;
         }
         let active = |pass: &mut wgpu::ComputePass<'_>, pl: &wgpu::ComputePipeline| {
             pass.set_pipeline(pl);
