@@ -247,6 +247,81 @@ fn gpu_per_colour_solve_matches_the_one_workgroup_solve_and_the_cpu() {
     );
 }
 
+/// Two contact paths of the GPU on one scene: `a` once, `b` twice.
+struct Paths {
+    ra: ricochet::run::RunResult,
+    rb: ricochet::run::RunResult,
+    model: Model,
+    ua: Vec<[f64; 2]>,
+    ub: Vec<[f64; 2]>,
+    /// Whether `a` and `b` gave the same history and displacement bits.
+    same: bool,
+    du: f64,
+    umax: f64,
+    de: f64,
+    ke0: f64,
+}
+
+/// Runs `text` with the contact options `a` once and `b` twice, and asserts what every pair of
+/// paths must hold: `b` gives the same bits on its second run, both give as many history rows,
+/// the same bits on a software adapter (where the two paths' kernels round alike), and otherwise
+/// displacements within [`solve_accuracy`] and energies within 1e-5 of the initial kinetic energy.
+fn compare_paths(
+    ctx: &Arc<GpuContext>,
+    text: &str,
+    name: &str,
+    a: (&str, ContactOptions),
+    b: (&str, ContactOptions),
+) -> Paths {
+    let (ra, model, ua, _) = run_gpu_with(ctx, text, &format!("{name}-{}", a.0), a.1);
+    let (rb, _, ub, _) = run_gpu_with(ctx, text, &format!("{name}-{}", b.0), b.1);
+    let (rb2, _, ub2, _) = run_gpu_with(ctx, text, &format!("{name}-{}2", b.0), b.1);
+    let (du, umax) = compare::displacement_difference(&ua, &ub);
+    let (de, ke0) = compare::energy_difference(&ra, &rb);
+    let same =
+        history_bits(&ra) == history_bits(&rb) && displacement_bits(&ua) == displacement_bits(&ub);
+    assert_eq!(
+        history_bits(&rb),
+        history_bits(&rb2),
+        "{name}: two {} runs differ",
+        b.0
+    );
+    assert_eq!(
+        displacement_bits(&ub),
+        displacement_bits(&ub2),
+        "{name}: two {} runs differ",
+        b.0
+    );
+    assert_eq!(ra.samples.len(), rb.samples.len());
+    if ctx.is_software() {
+        assert!(
+            same,
+            "{name}: {} and {} differ on {}",
+            a.0,
+            b.0,
+            ctx.adapter_name()
+        );
+    }
+    let accuracy = solve_accuracy(&model);
+    assert!(
+        du <= accuracy,
+        "{name}: displacements differ by {du:e} m (solve accuracy {accuracy:e} m)"
+    );
+    assert!(de <= 1e-5 * ke0, "{name}: energies differ by {de:e} J");
+    Paths {
+        ra,
+        rb,
+        model,
+        ua,
+        ub,
+        same,
+        du,
+        umax,
+        de,
+        ke0,
+    }
+}
+
 /// The one-workgroup solve with its active-set re-checks as their own dispatches over the active
 /// slots (the path of many slots on GPUs) against the solve that re-checks inside its workgroup,
 /// on the pile and on the striker whose re-checks add constraints. The split path gives the same
@@ -270,13 +345,24 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
             split: Some(split),
             ..ContactOptions::default()
         };
-        let (r1, model, u1, _) = run_gpu_with(&ctx, &text, &format!("{name}-inside"), with(false));
-        let (r2, _, u2, _) = run_gpu_with(&ctx, &text, &format!("{name}-split"), with(true));
-        let (r3, _, u3, _) = run_gpu_with(&ctx, &text, &format!("{name}-split2"), with(true));
-        let (du, umax) = compare::displacement_difference(&u1, &u2);
-        let (de, ke0) = compare::energy_difference(&r1, &r2);
-        let same = history_bits(&r1) == history_bits(&r2)
-            && displacement_bits(&u1) == displacement_bits(&u2);
+        let Paths {
+            ra: r1,
+            rb: r2,
+            model,
+            ua: u1,
+            ub: u2,
+            same,
+            du,
+            umax,
+            de,
+            ke0,
+        } = compare_paths(
+            &ctx,
+            &text,
+            name,
+            ("inside", with(false)),
+            ("split", with(true)),
+        );
         println!(
             "{name}: sweeps mean {:.2} max {} (inside the workgroup) and {:.2} max {} (split), \
              {} steps; split against inside: same bits {same}, |du| {du:.2e} of {umax:.2e} m, \
@@ -288,23 +374,7 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
             r1.summary.steps
         );
         assert!(r1.summary.contact_sweeps_max > 0, "{name}: the solve ran");
-        assert_eq!(
-            history_bits(&r2),
-            history_bits(&r3),
-            "{name}: two split runs differ"
-        );
-        assert_eq!(
-            displacement_bits(&u2),
-            displacement_bits(&u3),
-            "{name}: two split runs differ"
-        );
-        assert_eq!(r1.samples.len(), r2.samples.len());
         if ctx.is_software() {
-            assert!(
-                same,
-                "{name}: split and inside differ on {}",
-                ctx.adapter_name()
-            );
             assert_eq!(
                 r1.summary.contact_sweeps_mean.to_bits(),
                 r2.summary.contact_sweeps_mean.to_bits(),
@@ -312,11 +382,6 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
             );
         }
         let accuracy = solve_accuracy(&model);
-        assert!(
-            du <= accuracy,
-            "{name}: displacements differ by {du:e} m (solve accuracy {accuracy:e} m)"
-        );
-        assert!(de <= 1e-5 * ke0, "{name}: energies differ by {de:e} J");
         if name == "striker" {
             let (_, uc) = run_cpu(&text, "striker-split-cpu");
             for (path, u) in [("inside", &u1), ("split", &u2)] {
@@ -364,51 +429,27 @@ fn gpu_one_workgroup_contact_stage_matches_the_per_item_kernels() {
             one: Some(one),
             ..ContactOptions::default()
         };
-        let (r1, model, u1, _) = run_gpu_with(&ctx, &text, &format!("{name}-items"), with(false));
-        let (r2, _, u2, _) = run_gpu_with(&ctx, &text, &format!("{name}-one"), with(true));
-        let (r3, _, u3, _) = run_gpu_with(&ctx, &text, &format!("{name}-one2"), with(true));
-        let (du, umax) = compare::displacement_difference(&u1, &u2);
-        let (de, ke0) = compare::energy_difference(&r1, &r2);
-        let same = history_bits(&r1) == history_bits(&r2)
-            && displacement_bits(&u1) == displacement_bits(&u2);
-        let active = r1
-            .samples
-            .iter()
-            .map(|(s, _)| s.contacts.iter().map(|c| c.active_nodes).sum::<u32>())
-            .max()
-            .unwrap_or(0);
+        let p = compare_paths(
+            &ctx,
+            &text,
+            name,
+            ("items", with(false)),
+            ("one", with(true)),
+        );
+        let active =
+            p.ra.samples
+                .iter()
+                .map(|(s, _)| s.contacts.iter().map(|c| c.active_nodes).sum::<u32>())
+                .max()
+                .unwrap_or(0);
         println!(
             "{name}: {} steps, sweeps mean {:.2}, up to {active} active nodes; one workgroup \
-             against the per-item kernels: same bits {same}, |du| {du:.2e} of {umax:.2e} m, \
-             energies {de:.2e} of {ke0:.2e} J",
-            r1.summary.steps, r1.summary.contact_sweeps_mean,
+             against the per-item kernels: same bits {}, |du| {:.2e} of {:.2e} m, energies \
+             {:.2e} of {:.2e} J",
+            p.ra.summary.steps, p.ra.summary.contact_sweeps_mean, p.same, p.du, p.umax, p.de, p.ke0,
         );
         assert!(active > 0, "{name}: contact happened");
-        assert!(r1.summary.contact_sweeps_max > 0, "{name}: the solve ran");
-        assert_eq!(
-            history_bits(&r2),
-            history_bits(&r3),
-            "{name}: two one-workgroup runs differ"
-        );
-        assert_eq!(
-            displacement_bits(&u2),
-            displacement_bits(&u3),
-            "{name}: two one-workgroup runs differ"
-        );
-        assert_eq!(r1.samples.len(), r2.samples.len());
-        if ctx.is_software() {
-            assert!(
-                same,
-                "{name}: one workgroup and per-item kernels differ on {}",
-                ctx.adapter_name()
-            );
-        }
-        let accuracy = solve_accuracy(&model);
-        assert!(
-            du <= accuracy,
-            "{name}: displacements differ by {du:e} m (solve accuracy {accuracy:e} m)"
-        );
-        assert!(de <= 1e-5 * ke0, "{name}: energies differ by {de:e} J");
+        assert!(p.ra.summary.contact_sweeps_max > 0, "{name}: the solve ran");
     }
     // One workgroup takes neither the per-colour solve nor split re-checks.
     let (scene, model, plan) = load(&asset_path("pile.toml"), "pile.toml");
