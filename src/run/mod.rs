@@ -1,17 +1,27 @@
 //! Running a scene: the limits checked before a run starts ([`check_memory`],
-//! [`check_gpu_limits`], [`check_limits`]) and the time loop that drives a solver of either
-//! backend and writes the outputs ([`run`], [`run_with`]).
+//! [`check_gpu_limits`], [`check_limits`]), the time loop that drives a solver of either backend
+//! and writes the outputs ([`run`], [`run_with`]), and a whole run as `ricochet run` makes it,
+//! for any front end ([`RunRequest`], [`Prepared`], [`execute`]), stopped by an [`Interrupt`].
 //!
 //! - `limits.rs`: memory, GPU buffer and schedule limits;
-//! - `driver.rs`: the time loop, checkpoints and `summary.json`.
+//! - `driver.rs`: the time loop, checkpoints and `summary.json`;
+//! - `launch.rs`: requests, backend choice and outcomes;
+//! - `interrupt.rs`: the stop flags.
 //!
 //! The loop is the same for the CPU reference ([`crate::step::cpu`]) and the GPU
 //! ([`crate::gpu`]): both are driven through [`crate::step::Solver`].
 
 mod driver;
+mod interrupt;
+mod launch;
 mod limits;
 
 pub use driver::{interface_names, run, run_with, Progress, RunOptions, RunResult};
+pub use interrupt::Interrupt;
+pub use launch::{
+    choose_solver, execute, load, model_and_plan, Backend, Ending, Prepared, RunOutcome,
+    RunRequest, Start,
+};
 pub use limits::{
     available_memory, check_gpu_limits, check_limits, check_memory, element_counts, first_step,
     memory_estimate, BYTES_PER_ELEMENT, FIELD_BYTES_PER_ELEMENT, GPU_BYTES_PER_ELEMENT,
