@@ -41,6 +41,8 @@
 //!   GIF frames, the colour of the patch test's uniform stress, refused folders and fields;
 //! - [`restart`]: checkpoints and `run --restart` give the outputs of the run never stopped, bit
 //!   for bit, after a crash and after an interruption, with contact; bad checkpoints exit 2;
+//! - [`run_library`]: the run as a library call (`run::execute`): progress reported, an interrupt
+//!   flag giving an `interrupted` outcome and summary, and a restart through the same call;
 //! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound.
 
 #[path = "core/common.rs"]
@@ -90,6 +92,8 @@ mod plot;
 mod restart;
 #[path = "core/rigid.rs"]
 mod rigid;
+#[path = "core/run_library.rs"]
+mod run_library;
 #[path = "core/stress.rs"]
 mod stress;
 #[path = "core/verify_cases.rs"]
