@@ -85,15 +85,15 @@ pub fn contact_scene(cells: usize, contact: bool) -> Result<Scene> {
     )
 }
 
-/// Striker side [m] of [`striker_text`] (the plate is 5 x 1 of it).
+/// Striker side \[m\] of [`striker_text`] (the plate is 5 x 1 of it).
 pub const STRIKER_SIDE: f64 = 0.01;
-/// Impact velocity [m/s] of [`striker_text`]: v0 / c = 0.05 for steel (c about 6000 m/s).
+/// Impact velocity \[m/s\] of [`striker_text`]: v0 / c = 0.05 for steel (c about 6000 m/s).
 pub const STRIKER_VELOCITY: f64 = 300.0;
 /// O-grid cells of each disk of [`pile_text`] (3 x 6^2 = 108 elements per disk).
 pub const PILE_DISK_CELLS: usize = 6;
-/// Disk radius [m] of [`pile_text`].
+/// Disk radius \[m\] of [`pile_text`].
 pub const PILE_RADIUS: f64 = 0.005;
-/// Fall velocity [m/s] of [`pile_text`].
+/// Fall velocity \[m/s\] of [`pile_text`].
 pub const PILE_VELOCITY: f64 = 20.0;
 
 /// How [`pile_text`] puts its disks in contact.
