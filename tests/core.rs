@@ -43,6 +43,10 @@
 //!   for bit, after a crash and after an interruption, with contact; bad checkpoints exit 2;
 //! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound.
 
+#[macro_use]
+#[path = "shared/scene_text.rs"]
+mod scene_text;
+
 #[path = "core/common.rs"]
 mod common;
 
