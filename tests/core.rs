@@ -45,6 +45,10 @@
 //!   flag giving an `interrupted` outcome and summary, and a restart through the same call;
 //! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound.
 
+#[macro_use]
+#[path = "shared/scene_text.rs"]
+mod scene_text;
+
 #[path = "core/common.rs"]
 mod common;
 

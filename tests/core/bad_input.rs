@@ -8,14 +8,7 @@ use std::time::{Duration, Instant};
 
 use crate::common::*;
 
-const MATERIAL: &str = r#"
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
-"#;
+const MATERIAL: &str = concat!("\n", steel!(), "\n");
 
 const BODY: &str = r#"
 [[body]]
