@@ -429,7 +429,7 @@ fn row(
 
 /// Times the GPU of `ctx`: `rounds` rounds of `steps / rounds` steps of the full step and of the
 /// bare loop (element and node kernels only), each in submissions of at most
-/// [`crate::gpu::solver::MAX_BATCH`] steps, and of the contact scene with and without its contact
+/// [`crate::gpu::state::MAX_BATCH`] steps, and of the contact scene with and without its contact
 /// (with the host searches the contact kernel asks for), alternating; then each stage alone over
 /// the same steps for the shares.
 ///
@@ -443,7 +443,7 @@ pub fn gpu(ctx: Arc<GpuContext>, cells: usize, steps: u64, rounds: u32) -> Resul
     let ne = model.element_count();
     let adapter = ctx.adapter_name();
     let mut solver = GpuSolver::new(ctx.clone(), &model, &plan, crate::run::schedule(&scene))?;
-    let batch = crate::gpu::solver::MAX_BATCH as u64;
+    let batch = crate::gpu::state::MAX_BATCH as u64;
     let chunks =
         |steps: u64| (0..steps.div_ceil(batch)).map(move |k| (steps - k * batch).min(batch) as u32);
     solver.time_stage("step", 2)?; // warm-up (pipelines, first sample)

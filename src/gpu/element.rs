@@ -2,7 +2,7 @@
 //! element, the element stable step, and on sample steps the element energies. The CPU reference
 //! is [`crate::step::element::evaluate`]; `tests/gpu.rs` compares the two on random inputs.
 
-use super::kernels::{compute_pipeline, Features};
+use super::shader::{compute_pipeline, Features};
 
 /// WGSL source.
 pub const SOURCE: &str = include_str!("../../shaders/element.wgsl");

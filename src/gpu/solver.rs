@@ -16,15 +16,13 @@ use super::contact::{ContactCounters, ContactOptions, STATE_SEARCH_GROW};
 use super::context::GpuContext;
 use super::kernels::{Features, Kernels};
 use super::layout::*;
-use super::state::GpuState;
+use super::state::{GpuState, MAX_BATCH};
 
 /// One 2-vector per node.
 pub type NodalField = Vec<[f64; 2]>;
 
-/// Fewest steps recorded per submission.
+/// Fewest steps recorded per submission (the most: [`MAX_BATCH`]).
 pub const MIN_BATCH: u32 = 32;
-/// Most steps recorded per submission.
-pub const MAX_BATCH: u32 = 1024;
 
 /// Explicit central-difference integration on the GPU (f32).
 #[derive(Debug)]
