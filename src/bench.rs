@@ -12,13 +12,14 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use crate::element::{evaluate_with, Dissipation};
 use crate::error::{Error, Result};
+use crate::geometry::{quad_geometry, QuadGeometry};
 use crate::gpu::{GpuContext, GpuSolver};
 use crate::model::Model;
 use crate::plan::Plan;
 use crate::scene::Scene;
 use crate::step::cpu::CpuSolver;
-use crate::step::element::{evaluate_with, quad_geometry, Dissipation, QuadGeometry};
 use crate::step::Solver;
 
 /// Rounds by default: each variant is timed this many times, alternating, and medians reported.
@@ -223,11 +224,7 @@ impl BareLoop {
                 dt_min = dt_min.min(out.dt);
                 min_corner = min_corner.min(out.min_corner);
                 self.work += out.hourglass_work + out.bulk_work;
-                self.dissipation[e] = Dissipation {
-                    hourglass_q: out.hourglass_q,
-                    bulk_p: out.bulk_p,
-                    bulk_hoop: out.bulk_hoop,
-                };
+                self.dissipation[e] = out.dissipation;
             }
             self.dt_min = std::hint::black_box(dt_min);
             self.min_corner = std::hint::black_box(min_corner);

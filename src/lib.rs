@@ -15,7 +15,9 @@
 pub mod bench;
 pub mod checkpoint;
 pub mod contact;
+pub mod element;
 pub mod error;
+pub mod geometry;
 pub mod gmsh;
 pub mod gpu;
 pub mod mesh;

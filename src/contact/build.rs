@@ -4,8 +4,9 @@
 use std::collections::BTreeMap;
 
 use super::report::Interface;
-use super::surface::{self, Surface};
 use super::{ContactSet, Pass, Wall};
+use crate::geometry::quad_geometry;
+use crate::model::surface::{self, Surface};
 use crate::model::Model;
 use crate::scene::{Contact, PenaltyForm};
 
@@ -23,7 +24,7 @@ fn bulk_modulus(model: &Model, body: usize) -> f64 {
 }
 
 fn element_area(model: &Model, e: u32) -> f64 {
-    crate::step::element::quad_geometry(&model.corners[e as usize]).area
+    quad_geometry(&model.corners[e as usize]).area
 }
 
 /// Surfaces and local node numbering while the set is built.

@@ -2,10 +2,10 @@
 //! rigid walls, enforced after the uncoupled update of all bodies (the CONTACT step of the
 //! explicit flowchart, Belytschko X.6).
 //!
-//! One [`ContactSet`] holds every contact of a model; [`ContactSet::apply`] (here) runs the
-//! stages of a step in order, each in its own file:
+//! One [`ContactSet`] holds every contact of a model, built on the bodies' boundary edges and
+//! nodes ([`crate::model::surface`]); [`ContactSet::apply`] (here) runs the stages of a step in
+//! order, each in its own file:
 //!
-//! - [`surface`]: boundary edges of each body with outward normals, and boundary nodes.
 //! - [`search`] (with the `parry2d` BVH in [`broad`]): candidate (slave node, master segment)
 //!   pairs, inflated by a search margin and swept over the step; searched again only when some
 //!   contact node has moved more than half the margin since the last search.
@@ -34,13 +34,11 @@ pub mod overlap;
 pub mod report;
 pub mod search;
 pub mod solve;
-pub mod surface;
 pub mod tables;
 
 use crate::model::Model;
 use crate::scene::ContactMethod;
 
-pub use overlap::Overlap;
 pub use report::ContactSample;
 pub use solve::{
     extrapolation, penalty_impulse, SweepStats, ACTIVE_SET_ROUNDS, EXTRAPOLATION, MAX_SWEEPS,

@@ -5,11 +5,11 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::contact::ContactSample;
+use crate::element::plastic::PlasticState;
 use crate::error::{Error, Result};
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
 use crate::step::cpu::CpuSolver;
-use crate::step::plastic::PlasticState;
 use crate::step::{Counters, Event, Failure, Sample, Schedule, Snapshot, Solver};
 
 use super::contact::{ContactCounters, ContactOptions, STATE_SEARCH_GROW};

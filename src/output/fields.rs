@@ -14,11 +14,12 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use crate::element::plastic::{j2_elastic, PlasticState};
+use crate::element::{evaluate_state, Dissipation};
 use crate::error::Result;
+use crate::geometry::is_triangle;
 use crate::model::Model;
 use crate::scene::{FieldFormat, Formulation, MaterialModel};
-use crate::step::element::{evaluate_state, Dissipation};
-use crate::step::plastic::{j2_elastic, PlasticState};
 use crate::step::Snapshot;
 
 use super::{create_dir, write_file, write_pieces};
@@ -411,7 +412,7 @@ fn arrays(model: &Model, snap: &Snapshot, body: &crate::model::BodyModel) -> [Ve
     }];
     // Quads as VTK_QUAD (9); triangles, the collapsed quads [a, b, c, c], as VTK_TRIANGLE (5)
     // with their three nodes.
-    let tri = |e: usize| crate::step::element::is_triangle(&model.quads[e]);
+    let tri = |e: usize| is_triangle(&model.quads[e]);
     let mut offsets = Vec::with_capacity(elems.len());
     let mut end = 0i32;
     for e in elems.clone() {

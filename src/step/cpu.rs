@@ -1,12 +1,13 @@
 //! The CPU reference solver (f64, one thread). Every GPU kernel is tested against this path.
 
 use crate::contact::ContactSet;
+use crate::element::plastic::PlasticState;
+use crate::element::{evaluate_state, Dissipation};
 use crate::error::Result;
+use crate::geometry::QuadGeometry;
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
 
-use super::element::{evaluate_state, Dissipation, QuadGeometry};
-use super::plastic::PlasticState;
 use super::{Clock, Event, Failure, Sample, Schedule, Snapshot, Solver};
 
 /// Explicit central-difference integration of a [`Model`] on the CPU.
@@ -356,11 +357,7 @@ impl CpuSolver {
             if keep {
                 self.s.hourglass_work += out.hourglass_work;
                 self.s.bulk_work += out.bulk_work;
-                self.s.dissipation[e] = Dissipation {
-                    hourglass_q: out.hourglass_q,
-                    bulk_p: out.bulk_p,
-                    bulk_hoop: out.bulk_hoop,
-                };
+                self.s.dissipation[e] = out.dissipation;
             }
             if plastic {
                 self.s.plastic[e] = out.plastic;

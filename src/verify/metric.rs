@@ -4,12 +4,12 @@
 use std::collections::BTreeMap;
 
 use super::case::{eval, Metric, MetricKind};
-use crate::contact::surface::Surface;
+use crate::element::plastic::PlasticState;
+use crate::element::{evaluate_with, Dissipation};
+use crate::model::surface::Surface;
 use crate::model::Model;
 use crate::output::fields::{element_fields, element_fields_state};
 use crate::scene::RigidWall;
-use crate::step::element::{evaluate_with, Dissipation};
-use crate::step::plastic::PlasticState;
 use crate::step::Sample;
 
 /// A surface node touches a rigid wall when its distance to the wall is below this fraction of
@@ -140,7 +140,7 @@ pub struct RunData<'a> {
     /// The run's variables (case and level).
     pub vars: &'a BTreeMap<String, f64>,
     /// The plastic state of every element at the end (empty without a J2 plastic material).
-    pub plastic: &'a [crate::step::plastic::PlasticState],
+    pub plastic: &'a [PlasticState],
 }
 
 /// The least-squares line through `points` (t, v): its slope and its value at the mean t;
