@@ -416,19 +416,20 @@ fn node_groups(
     };
     let mut out = Vec::new();
     for n in names.iter().filter(|n| n.dim == 0 || n.dim == 1) {
+        // The points or curves of the physical group.
+        let member =
+            |tag: i32, physical: &[i32]| physical.iter().any(|&p| p.abs() == n.tag).then_some(tag);
         let tags: HashSet<i32> = if n.dim == 0 {
             entities
                 .points
                 .iter()
-                .filter(|e| e.physical_tags.iter().any(|&p| p.abs() == n.tag))
-                .map(|e| e.tag)
+                .filter_map(|e| member(e.tag, &e.physical_tags))
                 .collect()
         } else {
             entities
                 .curves
                 .iter()
-                .filter(|e| e.physical_tags.iter().any(|&p| p.abs() == n.tag))
-                .map(|e| e.tag)
+                .filter_map(|e| member(e.tag, &e.physical_tags))
                 .collect()
         };
         let mut nodes = BTreeSet::new();

@@ -385,12 +385,7 @@ pub fn run_with(
 ) -> Result<RunResult> {
     create_dir(out_dir)?;
     let bodies: Vec<String> = model.bodies.iter().map(|b| b.name.clone()).collect();
-    let contacts: Vec<String> = model
-        .contacts
-        .iter()
-        .map(|c| c.name.clone())
-        .chain(model.walls.iter().map(|w| w.name.clone()))
-        .collect();
+    let contacts = model.interface_names();
     let history_path = out_dir.join("history.csv");
     let format = scene.run.field_format;
     let mut audit = EnergyAudit::default();

@@ -79,18 +79,8 @@ struct Pass {
     segment_body: Vec<u32>,
     /// Penalty stiffness of each segment.
     stiffness: Vec<f64>,
-    /// Coulomb friction coefficient of the interface.
-    #[serde(default)]
-    friction: f64,
-    /// Penalty friction: the tangential spring over the normal one.
-    #[serde(default = "one")]
-    friction_stiffness: f64,
-    /// Penalty in the mass form (k = s m* / dt^2): outside the stable step.
-    #[serde(default)]
-    mass_form: bool,
-    /// Augmented Lagrangian: the multipliers' update rate (1/s; 0 for the other methods).
-    #[serde(default)]
-    augmentation: f64,
+    /// The interface's contact law.
+    law: Law,
     /// Admissible candidate (position in `slaves`, segment) pairs from the last search, sorted.
     candidates: Vec<(u32, u32)>,
 }
@@ -155,6 +145,14 @@ struct Wall {
     neighbours: Vec<[u32; 2]>,
     /// Penalty stiffness of each node.
     stiffness: Vec<f64>,
+    /// The wall's contact law.
+    law: Law,
+}
+
+/// The contact law of an interface (a `[[contact]]` table's passes, or a wall) besides its method
+/// and penalty stiffness: friction, and the penalty's form and augmentation.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+struct Law {
     /// Coulomb friction coefficient.
     #[serde(default)]
     friction: f64,

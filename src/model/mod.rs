@@ -9,7 +9,8 @@ pub mod surface;
 
 use std::ops::Range;
 
-use crate::element::{evaluate_with, Dissipation, ElementParams};
+use crate::element::plastic::PlasticState;
+use crate::element::{evaluate_state, evaluate_with, Dissipation, ElementOut, ElementParams};
 use crate::error::Result;
 use crate::geometry::{
     element_centre, is_triangle, is_triangle_geometry, lumped_mass, lumped_mass_axisymmetric,
@@ -535,6 +536,16 @@ impl Model {
         self.quads.len()
     }
 
+    /// The names of the contacts, then of the rigid walls: the interfaces in the order of the
+    /// history's contact columns.
+    pub fn interface_names(&self) -> Vec<String> {
+        self.contacts
+            .iter()
+            .map(|c| c.name.clone())
+            .chain(self.walls.iter().map(|w| w.name.clone()))
+            .collect()
+    }
+
     /// Whether the model has any contact or rigid wall.
     pub fn has_contact(&self) -> bool {
         !self.contacts.is_empty() || !self.walls.is_empty()
@@ -563,6 +574,21 @@ impl Model {
         } else {
             p.thickness
         }
+    }
+
+    /// Element `e` evaluated at rest at the nodal displacements `u` (no velocity, no step before)
+    /// from the plastic state `plastic`: its static forces and stress.
+    pub fn element_at(&self, e: usize, u: &[[f64; 2]], plastic: &PlasticState) -> ElementOut {
+        evaluate_state(
+            self.params(e),
+            &self.geometry(e),
+            &self.corners[e],
+            &self.quads[e].map(|i| u[i as usize]),
+            &[[0.0; 2]; 4],
+            &Dissipation::default(),
+            0.0,
+            plastic,
+        )
     }
 
     /// The elements' stable step at t = 0 (undeformed, at the initial velocities; without the

@@ -15,7 +15,6 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::element::plastic::{j2_elastic, PlasticState};
-use crate::element::{evaluate_state, Dissipation};
 use crate::error::Result;
 use crate::geometry::is_triangle;
 use crate::model::Model;
@@ -54,18 +53,7 @@ pub fn element_fields_state(
     plastic: &PlasticState,
 ) -> ElementFields {
     let p = model.params(e);
-    let q = model.quads[e];
-    let ue = q.map(|i| u[i as usize]);
-    let out = evaluate_state(
-        p,
-        &model.geometry(e),
-        &model.corners[e],
-        &ue,
-        &[[0.0; 2]; 4],
-        &Dissipation::default(),
-        0.0,
-        plastic,
-    );
+    let out = model.element_at(e, u, plastic);
     // A J2 element at the state the solver reached at u: its elastic response (evaluating it as
     // a step would return again, without the rate of the step that got there).
     let (stress, plastic_strain) = if p.model == MaterialModel::J2Plastic {
