@@ -394,7 +394,7 @@ pub enum MaterialModel {
     NeoHookean,
     /// J2 (von Mises) plasticity with linear isotropic hardening, finite strain: Hencky
     /// elasticity on the elastic left Cauchy-Green tensor of a multiplicative split, radial return
-    /// in logarithmic strain ([`crate::step::plastic`]).
+    /// in logarithmic strain ([`crate::element::plastic`]).
     J2Plastic,
 }
 
@@ -483,7 +483,7 @@ pub enum MeshSpec {
         /// Node coordinates.
         nodes: Vec<[f64; 2]>,
         /// Quads as 0-based node indices, counter-clockwise; a triangle `[a, b, c]` of the scene
-        /// is the collapsed quad `[a, b, c, c]` here (see [`crate::step::element`]).
+        /// is the collapsed quad `[a, b, c, c]` here (see [`crate::element`]).
         quads: Vec<[u32; 4]>,
     },
     /// A structured grid over an axis-aligned rectangle.
@@ -2101,7 +2101,7 @@ impl Validator<'_> {
                 }
             }
             // Quads that overlap without sharing an edge (one laid over others).
-            if let Some((i, j)) = crate::mesh::overlapping_quads(nodes, &out) {
+            if let Some((i, j)) = crate::geometry::overlapping_quads(nodes, &out) {
                 return Err(self.invalid(
                     format!("{key}.quads[{j}]"),
                     format!("{:?}", quads[j]),

@@ -43,7 +43,9 @@
 //!   for bit, after a crash and after an interruption, with contact; bad checkpoints exit 2;
 //! - [`run_library`]: the run as a library call (`run::execute`): progress reported, an interrupt
 //!   flag giving an `interrupted` outcome and summary, and a restart through the same call;
-//! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound.
+//! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound;
+//! - [`layout`]: the library's modules depend on each other one way (no circle between the
+//!   top-level modules, nor inside `step`, `contact` and `gpu`).
 
 #[macro_use]
 #[path = "shared/scene_text.rs"]
@@ -74,6 +76,8 @@ mod gmsh;
 mod gravity;
 #[path = "core/hourglass.rs"]
 mod hourglass;
+#[path = "core/layout.rs"]
+mod layout;
 #[path = "core/load_curve.rs"]
 mod load_curve;
 #[path = "core/mass.rs"]

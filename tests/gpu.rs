@@ -12,6 +12,8 @@ mod scene_text;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
+use ricochet::element::plastic::PlasticState;
+use ricochet::element::{evaluate_state, Dissipation};
 use ricochet::gpu::kernels::Kernels;
 use ricochet::gpu::shader::{self, Features};
 use ricochet::gpu::{GpuContext, GpuSolver};
@@ -20,8 +22,6 @@ use ricochet::plan::Plan;
 use ricochet::run::{run, schedule};
 use ricochet::scene::Scene;
 use ricochet::step::cpu::CpuSolver;
-use ricochet::step::element::{evaluate_state, Dissipation};
-use ricochet::step::plastic::PlasticState;
 use ricochet::step::Solver;
 
 /// One GPU test at a time: lavapipe shares the machine's two cores.
@@ -320,7 +320,7 @@ fn element_kernel_passes_the_patch_test_on_the_mixed_gmsh_mesh() {
         let tris = model
             .quads
             .iter()
-            .filter(|q| ricochet::step::element::is_triangle(q))
+            .filter(|q| ricochet::geometry::is_triangle(q))
             .count();
         assert_eq!((model.element_count(), tris), (55, 35));
         let mut gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");

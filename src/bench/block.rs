@@ -150,9 +150,9 @@ pub fn cpu(cells: usize, steps: u64, rounds: u32) -> Result<BenchRow> {
 }
 
 /// Wall seconds of `steps` steps of the stage `name` of `solver` alone, in submissions of at
-/// most [`crate::gpu::solver::MAX_BATCH`] steps.
+/// most [`crate::gpu::state::MAX_BATCH`] steps.
 fn stage_seconds(solver: &mut GpuSolver, name: &str, steps: u64) -> Result<f64> {
-    let batch = u64::from(crate::gpu::solver::MAX_BATCH);
+    let batch = u64::from(crate::gpu::state::MAX_BATCH);
     let mut t = 0.0;
     for k in 0..steps.div_ceil(batch) {
         t += solver.time_stage(name, (steps - k * batch).min(batch) as u32)?;
@@ -162,7 +162,7 @@ fn stage_seconds(solver: &mut GpuSolver, name: &str, steps: u64) -> Result<f64> 
 
 /// Times the GPU of `ctx`: `rounds` rounds of `steps / rounds` steps of the full step and of the
 /// bare loop (element and node kernels only), each in submissions of at most
-/// [`crate::gpu::solver::MAX_BATCH`] steps, and of the contact scene with and without its contact
+/// [`crate::gpu::state::MAX_BATCH`] steps, and of the contact scene with and without its contact
 /// (with the host searches the contact kernel asks for), alternating; then each stage alone over
 /// the same steps for the shares.
 ///

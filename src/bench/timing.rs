@@ -9,7 +9,8 @@ use crate::error::{Error, Result};
 use crate::gpu::GpuSolver;
 use crate::model::Model;
 use crate::step::cpu::CpuSolver;
-use crate::step::element::{evaluate_with, quad_geometry, Dissipation, QuadGeometry};
+use crate::element::{evaluate_with, Dissipation};
+use crate::geometry::{quad_geometry, QuadGeometry};
 use crate::step::Solver;
 
 /// Rounds by default: each variant is timed this many times, alternating, and medians reported.
@@ -100,11 +101,7 @@ impl BareLoop {
                 dt_min = dt_min.min(out.dt);
                 min_corner = min_corner.min(out.min_corner);
                 self.work += out.hourglass_work + out.bulk_work;
-                self.dissipation[e] = Dissipation {
-                    hourglass_q: out.hourglass_q,
-                    bulk_p: out.bulk_p,
-                    bulk_hoop: out.bulk_hoop,
-                };
+                self.dissipation[e] = out.dissipation;
             }
             self.dt_min = std::hint::black_box(dt_min);
             self.min_corner = std::hint::black_box(min_corner);

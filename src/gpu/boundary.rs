@@ -2,7 +2,7 @@
 //! prescribed velocities. CPU reference: the `VelocityBoundaries` stage of
 //! [`crate::step::cpu::CpuSolver`].
 
-use super::kernels::{compute_pipeline, Features};
+use super::shader::{compute_pipeline, Features};
 
 /// WGSL source (with the load curves' evaluation).
 pub const SOURCE: &str = concat!(

@@ -4,7 +4,7 @@
 //! rules as [`crate::step::Clock`]. Failures (inverted element, non-finite node, step too large)
 //! set the state to failed and every later dispatch returns at once.
 
-use super::kernels::{compute_pipeline, Features};
+use super::shader::{compute_pipeline, Features};
 
 /// WGSL source.
 pub const SOURCE: &str = include_str!("../../shaders/control.wgsl");

@@ -1,8 +1,8 @@
 //! Element stage kernel (`shaders/element.wgsl`): stress, hourglass and bulk-viscosity forces per
 //! element, the element stable step, and on sample steps the element energies. The CPU reference
-//! is [`crate::step::element::evaluate`]; `tests/gpu.rs` compares the two on random inputs.
+//! is [`crate::element::evaluate`]; `tests/gpu.rs` compares the two on random inputs.
 
-use super::kernels::{compute_pipeline, Features};
+use super::shader::{compute_pipeline, Features};
 
 /// WGSL source.
 pub const SOURCE: &str = include_str!("../../shaders/element.wgsl");

@@ -4,7 +4,7 @@
 //! level runs here too (`sum_instances`, one workgroup per instance, the same tree), the stable
 //! step's in [`super::control`].
 
-use super::kernels::{compute_pipeline, Features};
+use super::shader::{compute_pipeline, Features};
 
 /// WGSL source.
 pub const SOURCE: &str = include_str!("../../shaders/reduce.wgsl");

@@ -1,14 +1,13 @@
 //! Device-resident simulation state: the buffers a scene needs (and no others) and the bind groups,
 //! built once; [`GpuState::record_step`] records one step as labelled dispatches.
 
-use wgpu::util::DeviceExt;
-
 use crate::error::{Error, Result};
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
 use crate::scene::{Formulation, HourglassForm, MaterialModel};
 use crate::step::Schedule;
 
+use super::alloc::Alloc;
 use super::contact::{ContactState, Shared};
 use super::kernels::Kernels;
 use super::layout::*;
@@ -34,16 +33,20 @@ pub const FUSED_INSTANCES: usize = 1 << 11;
 /// instance beyond): the dispatch limit per dimension.
 pub const MAX_INST_GROUPS: u32 = 65535;
 
+/// Most steps recorded per submission (the solver's batches; the history ring holds at least
+/// this many rows).
+pub const MAX_BATCH: u32 = 1024;
+
 /// Rows the history ring holds between readbacks, at most (fewer when a row is so wide, with many
 /// bodies, that the ring would exceed the device's largest storage binding; never fewer than the
-/// steps of one submission, [`super::solver::MAX_BATCH`]).
+/// steps of one submission, [`MAX_BATCH`]).
 pub const ROW_CAPACITY: u32 = 4096;
 
 /// The history ring's rows for rows of `stride` words on a device whose largest storage binding
 /// is `max_binding` bytes.
 pub fn row_capacity(stride: u32, max_binding: u64) -> u32 {
     let fit = max_binding / (4 * stride.max(1) as u64);
-    (fit.min(ROW_CAPACITY as u64) as u32).max(super::solver::MAX_BATCH)
+    (fit.min(ROW_CAPACITY as u64) as u32).max(MAX_BATCH)
 }
 
 /// Buffers and bind groups of one scene on the device.
@@ -95,54 +98,6 @@ struct Binds {
     sum: wgpu::BindGroup,
     sum_instances: wgpu::BindGroup,
     control_end: wgpu::BindGroup,
-}
-
-pub(crate) struct Alloc<'a> {
-    device: &'a wgpu::Device,
-    list: Vec<(&'static str, u64)>,
-    /// Every buffer allocated, for checkpoints (each is copyable both ways).
-    buffers: Vec<(&'static str, wgpu::Buffer)>,
-}
-
-impl Alloc<'_> {
-    pub(crate) fn init(
-        &mut self,
-        name: &'static str,
-        data: &[u8],
-        usage: wgpu::BufferUsages,
-    ) -> wgpu::Buffer {
-        // Storage bindings may not be empty.
-        let pad = [0u8; 16];
-        let contents = if data.is_empty() { &pad[..] } else { data };
-        self.list.push((name, contents.len() as u64));
-        let buffer = self
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(name),
-                contents,
-                usage: usage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            });
-        self.buffers.push((name, buffer.clone()));
-        buffer
-    }
-
-    /// Records a buffer created elsewhere.
-    pub(crate) fn record(&mut self, name: &'static str, size: u64) {
-        self.list.push((name, size));
-    }
-
-    fn zeroed(&mut self, name: &'static str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
-        let size = size.max(16);
-        self.list.push((name, size));
-        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(name),
-            size,
-            usage: usage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        self.buffers.push((name, buffer.clone()));
-        buffer
-    }
 }
 
 fn entries<'a>(list: &[(u32, &'a wgpu::Buffer)]) -> Vec<wgpu::BindGroupEntry<'a>> {

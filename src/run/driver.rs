@@ -32,17 +32,6 @@ pub struct RunResult {
     pub out_dir: PathBuf,
 }
 
-/// The names of a model's contacts, then of its rigid walls: the interfaces of the contact
-/// columns of `history.csv`, in their order.
-pub fn interface_names(model: &Model) -> Vec<String> {
-    model
-        .contacts
-        .iter()
-        .map(|c| c.name.clone())
-        .chain(model.walls.iter().map(|w| w.name.clone()))
-        .collect()
-}
-
 /// Checkpoints and restarts of a run ([`run_with`]).
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
@@ -98,7 +87,7 @@ pub fn run_with(
 ) -> Result<RunResult> {
     create_dir(out_dir)?;
     let bodies: Vec<String> = model.bodies.iter().map(|b| b.name.clone()).collect();
-    let contacts = interface_names(model);
+    let contacts = model.interface_names();
     let history_path = out_dir.join("history.csv");
     let format = scene.run.field_format;
     let mut audit = EnergyAudit::default();

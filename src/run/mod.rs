@@ -16,7 +16,7 @@ mod interrupt;
 mod launch;
 mod limits;
 
-pub use driver::{interface_names, run, run_with, Progress, RunOptions, RunResult};
+pub use driver::{run, run_with, Progress, RunOptions, RunResult};
 pub use interrupt::Interrupt;
 pub use launch::{
     choose_solver, execute, load, model_and_plan, Backend, Ending, Prepared, RunOutcome,

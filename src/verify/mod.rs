@@ -16,7 +16,7 @@ use std::sync::Arc;
 use crate::error::{Error, Result};
 use crate::gpu::{GpuContext, GpuSolver};
 use crate::plan::Plan;
-use crate::run::{interface_names, run, schedule};
+use crate::run::{run, schedule};
 use crate::scene::Scene;
 use crate::step::cpu::CpuSolver;
 use crate::step::Solver;
@@ -384,7 +384,7 @@ fn run_one(
     let _ = std::fs::remove_dir_all(&dir);
     let displacement = solver.displacement_now()?;
     let plastic = solver.plastic_now()?;
-    let contacts = interface_names(&model);
+    let contacts = model.interface_names();
     let vars = case.variables(level);
     let data = metric::RunData {
         model: &model,

@@ -6,12 +6,12 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use ricochet::element::{evaluate, Dissipation, ElementParams};
 use ricochet::model::Model;
 use ricochet::plan::Plan;
 use ricochet::run::RunResult;
 use ricochet::scene::{Formulation, HourglassForm, Material, MaterialModel, Scene};
 use ricochet::step::cpu::CpuSolver;
-use ricochet::step::element::{evaluate, Dissipation, ElementParams};
 use ricochet::step::{Event, Failure, Sample, Schedule, Solver};
 
 /// Steel: Young's modulus (Pa).

@@ -12,12 +12,12 @@
 //!
 //! The runs go through `run::run`, and the checks read `history.csv`.
 
+use ricochet::geometry::HOURGLASS_BASE;
 use ricochet::model::Model;
 use ricochet::plan::Plan;
 use ricochet::run;
 use ricochet::scene::Scene;
 use ricochet::step::cpu::CpuSolver;
-use ricochet::step::element::HOURGLASS_BASE;
 
 use crate::common::*;
 use crate::scene_text::{fixed_step_run, STEEL};

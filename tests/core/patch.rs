@@ -5,8 +5,8 @@
 //! MacNeal-Harder patch, and for both plane strain and plane stress; plus the neo-Hookean
 //! analogue with a large homogeneous deformation.
 
+use ricochet::element::{evaluate, Dissipation};
 use ricochet::scene::{Formulation, HourglassForm, MaterialModel};
-use ricochet::step::element::{evaluate, Dissipation};
 
 use crate::common::*;
 use crate::scene_text::steel_of;

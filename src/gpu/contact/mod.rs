@@ -34,9 +34,9 @@ use crate::contact::ContactSet;
 use crate::error::{Error, Result};
 use crate::model::Model;
 
-use super::kernels::Features;
+use super::alloc::Alloc;
 use super::shader;
-use super::state::Alloc;
+use super::shader::Features;
 
 /// Shared WGSL declarations of the contact kernels.
 pub const COMMON: &str = include_str!("../../../shaders/contact_common.wgsl");
