@@ -16,6 +16,7 @@ pub mod bench;
 pub mod checkpoint;
 pub mod contact;
 pub mod error;
+pub mod geometry;
 pub mod gmsh;
 pub mod gpu;
 pub mod mesh;
