@@ -7,7 +7,7 @@ use serde::Deserialize;
 use super::fixed;
 use super::material::{Material, MaterialModel};
 use super::mesh::{MeshSpec, RawMesh};
-use super::validate::{fmt_num, Validator};
+use super::validate::{fmt_num, shown_name, Validator};
 use crate::error::Result;
 
 /// Longest body name (bytes).
@@ -128,11 +128,9 @@ impl Validator<'_> {
         if ok {
             return Ok(());
         }
-        let shown: String = name.chars().take(40).collect();
-        let more = if name.chars().count() > 40 { "..." } else { "" };
         Err(self.invalid(
             key,
-            format!("{shown:?}{more}"),
+            shown_name(name),
             &format!(
                 "a name must be 1 to {NAME_MAX} ASCII letters, digits, `_`, `-` or `.`, not \
                  starting with `.` or `-` (names become file names and history.csv columns)"
@@ -141,29 +139,22 @@ impl Validator<'_> {
     }
 
     fn body(&self, key: &str, b: &RawBody, materials: &[Material]) -> Result<Body> {
-        let material = materials
-            .iter()
-            .position(|m| m.name == b.material)
-            .ok_or_else(|| {
-                let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
-                self.invalid(
-                    format!("{key}.material"),
-                    format!("{:?}", b.material),
-                    &format!("no material of that name (defined: {known:?})"),
-                )
-            })?;
-        let formulation = match b.formulation.as_deref() {
-            None | Some("plane_strain") => Formulation::PlaneStrain,
-            Some("plane_stress") => Formulation::PlaneStress,
-            Some("axisymmetric") => Formulation::Axisymmetric,
-            Some(other) => {
-                return Err(self.invalid(
-                    format!("{key}.formulation"),
-                    format!("{other:?}"),
-                    "expected \"plane_strain\", \"plane_stress\" or \"axisymmetric\"",
-                ))
-            }
-        };
+        let material = self.index_of(
+            &format!("{key}.material"),
+            &b.material,
+            "material",
+            materials.iter().map(|m| m.name.as_str()),
+        )?;
+        let formulation = self.keyword(
+            &format!("{key}.formulation"),
+            b.formulation.as_deref(),
+            &[
+                ("plane_strain", Formulation::PlaneStrain),
+                ("plane_stress", Formulation::PlaneStress),
+                ("axisymmetric", Formulation::Axisymmetric),
+            ],
+            "expected \"plane_strain\", \"plane_stress\" or \"axisymmetric\"",
+        )?;
         if formulation == Formulation::PlaneStress
             && materials[material].model == MaterialModel::J2Plastic
         {
@@ -190,36 +181,32 @@ impl Validator<'_> {
             };
         let mesh = self.mesh(&format!("{key}.mesh"), &b.mesh)?;
         let v0 = b.initial_velocity.unwrap_or([0.0, 0.0]);
-        self.finite(&format!("{key}.initial_velocity"), v0[0])?;
-        self.finite(&format!("{key}.initial_velocity"), v0[1])?;
+        self.finite_all(&format!("{key}.initial_velocity"), &v0)?;
         let angular_velocity = self.finite(
             &format!("{key}.angular_velocity"),
             b.angular_velocity.unwrap_or(0.0),
         )?;
         let velocity_gradient = b.velocity_gradient.unwrap_or([[0.0; 2]; 2]);
-        for row in &velocity_gradient {
-            for x in row {
-                self.finite(&format!("{key}.velocity_gradient"), *x)?;
-            }
-        }
+        self.finite_all(
+            &format!("{key}.velocity_gradient"),
+            velocity_gradient.as_flattened(),
+        )?;
         let hourglass = match &b.hourglass {
             None => Hourglass {
                 form: HourglassForm::Viscous,
                 coefficient: DEFAULT_HOURGLASS_COEFFICIENT,
             },
             Some(h) => {
-                let form = match h.form.as_deref() {
-                    None | Some("viscous") => HourglassForm::Viscous,
-                    Some("stiffness") => HourglassForm::Stiffness,
-                    Some("none") => HourglassForm::None,
-                    Some(other) => {
-                        return Err(self.invalid(
-                            format!("{key}.hourglass.form"),
-                            format!("{other:?}"),
-                            "expected \"viscous\", \"stiffness\" or \"none\"",
-                        ))
-                    }
-                };
+                let form = self.keyword(
+                    &format!("{key}.hourglass.form"),
+                    h.form.as_deref(),
+                    &[
+                        ("viscous", HourglassForm::Viscous),
+                        ("stiffness", HourglassForm::Stiffness),
+                        ("none", HourglassForm::None),
+                    ],
+                    "expected \"viscous\", \"stiffness\" or \"none\"",
+                )?;
                 let coefficient = match h.coefficient {
                     Some(c) => self.non_negative(&format!("{key}.hourglass.coefficient"), c)?,
                     None => DEFAULT_HOURGLASS_COEFFICIENT,

@@ -7,7 +7,6 @@ use serde::Deserialize;
 
 use super::body::Body;
 use super::fixed;
-use super::mesh::MeshSpec;
 use super::validate::{fmt_num, Validator};
 use crate::error::Result;
 
@@ -158,36 +157,22 @@ pub struct Pressure {
 impl Validator<'_> {
     /// The `[[boundary]]` tables, in order.
     pub(super) fn boundaries(&self, raw: &[RawBoundary], bodies: &[Body]) -> Result<Vec<Boundary>> {
-        let mut boundaries = Vec::new();
-        for (i, b) in raw.iter().enumerate() {
-            let key = format!("boundary[{i}]");
-            boundaries.push(self.boundary(&key, b, bodies)?);
-        }
-        Ok(boundaries)
+        raw.iter()
+            .enumerate()
+            .map(|(i, b)| self.boundary(&format!("boundary[{i}]"), b, bodies))
+            .collect()
     }
 
     /// The `[[pressure]]` tables, in order.
     pub(super) fn pressures(&self, raw: &[RawPressure], bodies: &[Body]) -> Result<Vec<Pressure>> {
-        let mut pressures = Vec::new();
-        for (i, p) in raw.iter().enumerate() {
-            let key = format!("pressure[{i}]");
-            pressures.push(self.pressure(&key, p, bodies)?);
-        }
-        Ok(pressures)
+        raw.iter()
+            .enumerate()
+            .map(|(i, p)| self.pressure(&format!("pressure[{i}]"), p, bodies))
+            .collect()
     }
 
     fn boundary(&self, key: &str, b: &RawBoundary, bodies: &[Body]) -> Result<Boundary> {
-        let body = bodies
-            .iter()
-            .position(|x| x.name == b.body)
-            .ok_or_else(|| {
-                let known: Vec<&str> = bodies.iter().map(|m| m.name.as_str()).collect();
-                self.invalid(
-                    format!("{key}.body"),
-                    format!("{:?}", b.body),
-                    &format!("no body of that name (defined: {known:?})"),
-                )
-            })?;
+        let body = self.body_index(&format!("{key}.body"), &b.body, bodies)?;
         let (min, max, group) = self.region(key, &b.region, &bodies[body], 0)?;
         if b.velocity.x.is_none() && b.velocity.y.is_none() {
             return Err(self.invalid(
@@ -301,29 +286,14 @@ impl Validator<'_> {
                 ));
             }
             let gk = format!("{rk}.group");
-            let MeshSpec::Gmsh { file, mesh, .. } = &body.mesh else {
-                return Err(self.invalid(
-                    gk,
-                    format!("{name:?}"),
-                    &format!(
-                        "body {:?} is not read from a Gmsh file: a region by name is a physical \
-                         curve or point of the body's mesh file",
-                        body.name
-                    ),
-                ));
-            };
-            let Some(g) = mesh.groups.iter().find(|g| g.name == *name) else {
-                let known: Vec<&str> = mesh.groups.iter().map(|g| g.name.as_str()).collect();
-                return Err(self.invalid(
-                    gk,
-                    format!("{name:?}"),
-                    &format!(
-                        "{} has no physical curve or point of that name on body {:?} (there: {known:?})",
-                        file.display(),
-                        body.name
-                    ),
-                ));
-            };
+            let (file, g) = self.mesh_group(
+                &gk,
+                name,
+                body,
+                "a region by name",
+                "physical curve or point",
+                |_| true,
+            )?;
             if g.dim < min_dim {
                 return Err(self.invalid(
                     gk,

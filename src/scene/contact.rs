@@ -8,8 +8,7 @@ use serde::Deserialize;
 
 use super::body::Body;
 use super::fixed;
-use super::mesh::MeshSpec;
-use super::validate::{fmt_num, Validator};
+use super::validate::{fmt_num, shown_name, Validator};
 use crate::error::Result;
 
 /// Longest contact or rigid-wall name (characters): it heads four `history.csv` columns.
@@ -31,8 +30,25 @@ pub(super) struct RawContact {
     augmentation_rate: Option<f64>,
 }
 
-/// The penalty and friction keys of a `[[contact]]` or `[[rigid_wall]]` as written.
+/// The enforcement keys of a raw `[[contact]]` or `[[rigid_wall]]` table `$t` (the two spell
+/// them alike) as [`RawSprings`].
+macro_rules! raw_springs {
+    ($t:expr) => {
+        RawSprings {
+            method: $t.method.as_deref(),
+            form: $t.penalty_stiffness.as_deref(),
+            scale: $t.penalty_scale,
+            friction: $t.friction,
+            friction_stiffness: $t.friction_stiffness,
+            augmentation_rate: $t.augmentation_rate,
+        }
+    };
+}
+
+/// The enforcement keys of a `[[contact]]` or `[[rigid_wall]]` as written: the method, the
+/// penalty and the friction.
 struct RawSprings<'a> {
+    method: Option<&'a str>,
     form: Option<&'a str>,
     scale: Option<f64>,
     friction: Option<f64>,
@@ -40,8 +56,9 @@ struct RawSprings<'a> {
     augmentation_rate: Option<f64>,
 }
 
-/// The penalty and friction keys of a contact or wall, checked, with their defaults.
+/// The enforcement of a contact or wall, checked, with its defaults.
 struct Springs {
+    method: ContactMethod,
     form: PenaltyForm,
     scale: f64,
     friction: f64,
@@ -293,11 +310,9 @@ impl Validator<'_> {
             ));
         }
         if name.is_empty() || name.contains([',', '"']) || name.chars().any(char::is_control) {
-            let shown: String = name.chars().take(40).collect();
-            let more = if name.chars().count() > 40 { "..." } else { "" };
             return Err(self.invalid(
                 format!("{key}.name"),
-                format!("{shown:?}{more}"),
+                shown_name(name),
                 &format!(
                     "must be 1 to {CONTACT_NAME_MAX} characters, without commas, quotes or \
                      control characters (it names history columns)"
@@ -310,10 +325,9 @@ impl Validator<'_> {
     /// A `name` given to a contact or wall (default names, made of body names, may be longer).
     fn given_name_length(&self, key: &str, name: Option<&String>) -> Result<()> {
         if let Some(name) = name.filter(|n| n.chars().count() > CONTACT_NAME_MAX) {
-            let shown: String = name.chars().take(40).collect();
             return Err(self.invalid(
                 format!("{key}.name"),
-                format!("{shown:?}..."),
+                shown_name(name),
                 &format!(
                     "must be 1 to {CONTACT_NAME_MAX} characters, without commas, quotes or \
                      control characters (it names history columns); this one has {}",
@@ -324,29 +338,21 @@ impl Validator<'_> {
         Ok(())
     }
 
-    fn method(&self, key: &str, m: Option<&str>) -> Result<ContactMethod> {
-        match m {
-            None | Some("lagrange") => Ok(ContactMethod::Lagrange),
-            Some("penalty") => Ok(ContactMethod::Penalty),
-            Some("perturbed_lagrange") => Ok(ContactMethod::PerturbedLagrange),
-            Some("augmented_lagrange") => Ok(ContactMethod::AugmentedLagrange),
-            Some(other) => Err(self.invalid(
-                key,
-                format!("{other:?}"),
-                "expected \"lagrange\", \"penalty\", \"perturbed_lagrange\" or \
-                 \"augmented_lagrange\"",
-            )),
-        }
-    }
-
-    /// The penalty and friction keys of contact or wall `key` with `method`.
-    fn springs(
-        &self,
-        key: &str,
-        method: ContactMethod,
-        raw: RawSprings,
-        mass_damping: f64,
-    ) -> Result<Springs> {
+    /// The enforcement keys of contact or wall `key`: the method, then the penalty and friction
+    /// keys that go with it.
+    fn springs(&self, key: &str, raw: RawSprings, mass_damping: f64) -> Result<Springs> {
+        let method = self.keyword(
+            &format!("{key}.method"),
+            raw.method,
+            &[
+                ("lagrange", ContactMethod::Lagrange),
+                ("penalty", ContactMethod::Penalty),
+                ("perturbed_lagrange", ContactMethod::PerturbedLagrange),
+                ("augmented_lagrange", ContactMethod::AugmentedLagrange),
+            ],
+            "expected \"lagrange\", \"penalty\", \"perturbed_lagrange\" or \
+             \"augmented_lagrange\"",
+        )?;
         let form = self.penalty_form(&format!("{key}.penalty_stiffness"), raw.form, method)?;
         let scale = self.penalty_scale(&format!("{key}.penalty_scale"), raw.scale, method, form)?;
         let friction = self.friction(&format!("{key}.friction"), raw.friction, method)?;
@@ -359,6 +365,7 @@ impl Validator<'_> {
         let augmentation_rate =
             self.augmentation_rate(key, raw.augmentation_rate, method, mass_damping)?;
         Ok(Springs {
+            method,
             form,
             scale,
             friction,
@@ -425,18 +432,18 @@ impl Validator<'_> {
         form: Option<&str>,
         method: ContactMethod,
     ) -> Result<PenaltyForm> {
-        let f = match form {
-            None => return Ok(DEFAULT_PENALTY_FORM),
-            Some("modulus") => PenaltyForm::Modulus,
-            Some("mass") => PenaltyForm::Mass,
-            Some(other) => {
-                return Err(self.invalid(
-                    key,
-                    format!("{other:?}"),
-                    "expected \"modulus\" (k = s K t L^2 / A) or \"mass\" (k = s m* / dt^2)",
-                ))
-            }
-        };
+        if form.is_none() {
+            return Ok(DEFAULT_PENALTY_FORM);
+        }
+        let f = self.keyword(
+            key,
+            form,
+            &[
+                ("modulus", PenaltyForm::Modulus),
+                ("mass", PenaltyForm::Mass),
+            ],
+            "expected \"modulus\" (k = s K t L^2 / A) or \"mass\" (k = s m* / dt^2)",
+        )?;
         if !method.has_springs() {
             return Err(self.invalid(
                 key,
@@ -575,25 +582,7 @@ impl Validator<'_> {
             ));
         }
         self.given_name_length(key, c.name.as_ref())?;
-        let method = self.method(&format!("{key}.method"), c.method.as_deref())?;
-        let Springs {
-            form: penalty_form,
-            scale: penalty_scale,
-            friction,
-            friction_stiffness,
-            augmentation_rate,
-        } = self.springs(
-            key,
-            method,
-            RawSprings {
-                form: c.penalty_stiffness.as_deref(),
-                scale: c.penalty_scale,
-                friction: c.friction,
-                friction_stiffness: c.friction_stiffness,
-                augmentation_rate: c.augmentation_rate,
-            },
-            mass_damping,
-        )?;
+        let springs = self.springs(key, raw_springs!(c), mass_damping)?;
         let names: Vec<&str> = list.iter().map(|&i| bodies[i].name.as_str()).collect();
         let default = if !group {
             names.join("-")
@@ -610,66 +599,56 @@ impl Validator<'_> {
         }
         let surfaces = match &c.surfaces {
             None => None,
-            Some(names) => {
-                let sk = format!("{key}.surfaces");
-                if group || names.len() != 2 {
-                    return Err(self.invalid(
-                        sk,
-                        format!("{names:?}"),
-                        "name one physical curve per body of a contact pair (two bodies, in \
-                         the order of `bodies`)",
-                    ));
-                }
-                let mut out = Vec::new();
-                for (k, (name, &b)) in names.iter().zip(&list).enumerate() {
-                    let body = &bodies[b];
-                    let MeshSpec::Gmsh { file, mesh, .. } = &body.mesh else {
-                        return Err(self.invalid(
-                            format!("{sk}[{k}]"),
-                            format!("{name:?}"),
-                            &format!(
-                                "body {:?} is not read from a Gmsh file: a contact surface by \
-                                 name is a physical curve of the body's mesh file",
-                                body.name
-                            ),
-                        ));
-                    };
-                    let Some(g) = mesh.groups.iter().find(|g| g.name == *name && g.dim == 1) else {
-                        let known: Vec<&str> = mesh
-                            .groups
-                            .iter()
-                            .filter(|g| g.dim == 1)
-                            .map(|g| g.name.as_str())
-                            .collect();
-                        return Err(self.invalid(
-                            format!("{sk}[{k}]"),
-                            format!("{name:?}"),
-                            &format!(
-                                "{} has no physical curve of that name on body {:?} (there: {known:?})",
-                                file.display(),
-                                body.name
-                            ),
-                        ));
-                    };
-                    out.push((name.clone(), g.edges.clone()));
-                }
-                Some(out)
-            }
+            Some(names) => Some(self.surfaces(key, names, group, &list, bodies)?),
         };
         Ok(Contact {
             name: c.name.clone().unwrap_or(default),
             bodies: list,
             group,
             self_contact,
-            method,
+            method: springs.method,
             two_pass: group || c.two_pass.unwrap_or(true),
-            penalty_scale,
-            penalty_form,
-            friction_stiffness,
+            penalty_scale: springs.scale,
+            penalty_form: springs.form,
+            friction_stiffness: springs.friction_stiffness,
             surfaces,
-            friction,
-            augmentation_rate,
+            friction: springs.friction,
+            augmentation_rate: springs.augmentation_rate,
         })
+    }
+
+    /// `surfaces` of contact `key` between `bodies` `list` (not a `group`): one physical curve of
+    /// each body's Gmsh file, as its name and line elements.
+    fn surfaces(
+        &self,
+        key: &str,
+        names: &[String],
+        group: bool,
+        list: &[usize],
+        bodies: &[Body],
+    ) -> Result<Vec<(String, Vec<[u32; 2]>)>> {
+        let sk = format!("{key}.surfaces");
+        if group || names.len() != 2 {
+            return Err(self.invalid(
+                sk,
+                format!("{names:?}"),
+                "name one physical curve per body of a contact pair (two bodies, in \
+                 the order of `bodies`)",
+            ));
+        }
+        let mut out = Vec::new();
+        for (k, (name, &b)) in names.iter().zip(list).enumerate() {
+            let (_, g) = self.mesh_group(
+                &format!("{sk}[{k}]"),
+                name,
+                &bodies[b],
+                "a contact surface by name",
+                "physical curve",
+                |dim| dim == 1,
+            )?;
+            out.push((name.clone(), g.edges.clone()));
+        }
+        Ok(out)
     }
 
     fn wall(
@@ -713,25 +692,7 @@ impl Validator<'_> {
             }
             None => (0..bodies.len()).collect(),
         };
-        let method = self.method(&format!("{key}.method"), w.method.as_deref())?;
-        let Springs {
-            form: penalty_form,
-            scale: penalty_scale,
-            friction,
-            friction_stiffness,
-            augmentation_rate,
-        } = self.springs(
-            key,
-            method,
-            RawSprings {
-                form: w.penalty_stiffness.as_deref(),
-                scale: w.penalty_scale,
-                friction: w.friction,
-                friction_stiffness: w.friction_stiffness,
-                augmentation_rate: w.augmentation_rate,
-            },
-            mass_damping,
-        )?;
+        let springs = self.springs(key, raw_springs!(w), mass_damping)?;
         let name = match &w.name {
             Some(n) => n.clone(),
             None => {
@@ -744,12 +705,12 @@ impl Validator<'_> {
             point: w.point,
             normal,
             bodies: list,
-            method,
-            penalty_scale,
-            penalty_form,
-            friction_stiffness,
-            friction,
-            augmentation_rate,
+            method: springs.method,
+            penalty_scale: springs.scale,
+            penalty_form: springs.form,
+            friction_stiffness: springs.friction_stiffness,
+            friction: springs.friction,
+            augmentation_rate: springs.augmentation_rate,
         })
     }
 }

@@ -5,7 +5,7 @@
 
 use serde::Deserialize;
 
-use super::validate::{fmt_num, Validator};
+use super::validate::{fmt_num, number, Validator};
 use crate::error::Result;
 
 #[derive(Debug, Deserialize)]
@@ -97,18 +97,18 @@ impl Validator<'_> {
         Ok(materials)
     }
 
+    /// One `[[material]]` table at `key`.
     fn material(&self, key: &str, m: &RawMaterial) -> Result<Material> {
-        let model =
-            match m.model.as_str() {
-                "linear_elastic" => MaterialModel::LinearElastic,
-                "neo_hookean" => MaterialModel::NeoHookean,
-                "j2_plastic" => MaterialModel::J2Plastic,
-                other => return Err(self.invalid(
-                    format!("{key}.model"),
-                    format!("{other:?}"),
-                    "unknown model; expected \"linear_elastic\", \"neo_hookean\" or \"j2_plastic\"",
-                )),
-            };
+        let model = self.keyword(
+            &format!("{key}.model"),
+            Some(&m.model),
+            &[
+                ("linear_elastic", MaterialModel::LinearElastic),
+                ("neo_hookean", MaterialModel::NeoHookean),
+                ("j2_plastic", MaterialModel::J2Plastic),
+            ],
+            "unknown model; expected \"linear_elastic\", \"neo_hookean\" or \"j2_plastic\"",
+        )?;
         let plasticity = self.plasticity(key, m, model)?;
         let density = self.positive(&format!("{key}.density"), m.density)?;
         let youngs_modulus = self.positive(&format!("{key}.youngs_modulus"), m.youngs_modulus)?;
@@ -220,11 +220,9 @@ impl Validator<'_> {
                     "missing",
                     "the Johnson-Cook flow stress needs a, b, n, c and reference_strain_rate",
                 )),
-                Some(toml::Value::Float(x)) => Ok(*x),
-                Some(toml::Value::Integer(i)) => Ok(*i as f64),
-                Some(other) => {
-                    Err(self.invalid(format!("{key}.{k}"), other.to_string(), "expected a number"))
-                }
+                Some(v) => number(v).ok_or_else(|| {
+                    self.invalid(format!("{key}.{k}"), v.to_string(), "expected a number")
+                }),
             }
         };
         let a = self.positive(&format!("{key}.a"), get("a")?)?;

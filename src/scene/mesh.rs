@@ -105,6 +105,7 @@ pub struct DiskRefinement {
 }
 
 impl Validator<'_> {
+    /// The `mesh` of a body at `key`: exactly one of its four forms.
     pub(super) fn mesh(&self, key: &str, m: &RawMesh) -> Result<MeshSpec> {
         let given = [
             m.rectangle.is_some(),
@@ -121,202 +122,221 @@ impl Validator<'_> {
             ));
         }
         if m.gmsh.is_some() || m.group.is_some() {
-            let (Some(file), Some(group)) = (&m.gmsh, &m.group) else {
-                return Err(self.invalid(
-                    key,
-                    "{...}",
-                    "a Gmsh mesh needs both `gmsh` (the .msh file) and `group` (a physical surface)",
-                ));
-            };
-            let path = self
-                .file
-                .parent()
-                .map_or_else(|| PathBuf::from(file), |d| d.join(file));
-            let read = crate::gmsh::read_bytes(&path)
-                .and_then(|bytes| crate::gmsh::read_surface(&bytes, group));
-            return match read {
-                Ok(mesh) => Ok(MeshSpec::Gmsh {
-                    file: path,
-                    group: group.clone(),
-                    mesh,
-                }),
-                Err(problem) => Err(self.invalid(
-                    format!("{key}.gmsh"),
-                    format!("{file:?}"),
-                    &format!("{}: {problem}", path.display()),
-                )),
-            };
+            return self.gmsh_mesh(key, m.gmsh.as_deref(), m.group.as_deref());
         }
         if m.nodes.is_some() || m.quads.is_some() {
-            let (Some(nodes), Some(quads)) = (&m.nodes, &m.quads) else {
-                return Err(self.invalid(
-                    key,
-                    "{...}",
-                    "an explicit mesh needs both `nodes` and `quads`",
-                ));
-            };
-            if quads.is_empty() {
-                return Err(self.invalid(format!("{key}.quads"), "[]", "no quads"));
-            }
-            for (i, p) in nodes.iter().enumerate() {
-                if !(p[0].is_finite() && p[1].is_finite()) {
-                    return Err(self.invalid(
-                        format!("{key}.nodes[{i}]"),
-                        format!("{p:?}"),
-                        "must be finite",
-                    ));
-                }
-            }
-            let mut out = Vec::with_capacity(quads.len());
-            for (i, q) in quads.iter().enumerate() {
-                if q.iter().any(|&n| n < 0 || n as usize >= nodes.len()) {
-                    return Err(self.invalid(
-                        format!("{key}.quads[{i}]"),
-                        format!("{q:?}"),
-                        &format!("node index out of range (0..{})", nodes.len()),
-                    ));
-                }
-                out.push(q.map(|n| n as u32));
-            }
-            // In a mesh of counter-clockwise quads each directed edge belongs to one quad at most:
-            // a second one lies on the same side of it (a duplicate or overlapping quad).
-            let mut edges = std::collections::HashMap::with_capacity(4 * out.len());
-            for (i, q) in out.iter().enumerate() {
-                for k in 0..4 {
-                    let e = (q[k], q[(k + 1) % 4]);
-                    if e.0 == e.1 {
-                        // The collapsed side of a triangle [a, b, c, c] (a repeated node
-                        // elsewhere is refused when the model is built).
-                        continue;
-                    }
-                    if let Some(j) = edges.insert(e, i) {
-                        return Err(self.invalid(
-                            format!("{key}.quads[{i}]"),
-                            format!("{:?}", quads[i]),
-                            &format!(
-                                "overlaps quads[{j}] = {:?}: both have the edge from node {} to \
-                                 node {} on the same side (a duplicate or overlapping quad)",
-                                quads[j], e.0, e.1
-                            ),
-                        ));
-                    }
-                }
-            }
-            // Quads that overlap without sharing an edge (one laid over others).
-            if let Some((i, j)) = crate::geometry::overlapping_quads(nodes, &out) {
-                return Err(self.invalid(
-                    format!("{key}.quads[{j}]"),
-                    format!("{:?}", quads[j]),
-                    &format!(
-                        "overlaps quads[{i}] = {:?}: their interiors intersect (a quad laid over \
-                         others; quads may share edges and corners only)",
-                        quads[i]
-                    ),
-                ));
-            }
-            return Ok(MeshSpec::Explicit {
-                nodes: nodes.clone(),
-                quads: out,
-            });
+            return self.explicit_mesh(key, m.nodes.as_deref(), m.quads.as_deref());
         }
         match (&m.rectangle, &m.disk) {
-            (Some(r), None) => {
-                let k = format!("{key}.rectangle");
-                self.finite(&format!("{k}.origin"), r.origin[0])?;
-                self.finite(&format!("{k}.origin"), r.origin[1])?;
-                for (i, s) in r.size.iter().enumerate() {
-                    if !(s.is_finite() && *s > 0.0) {
-                        return Err(self.invalid(
-                            format!("{k}.size"),
-                            format!("{:?}", r.size),
-                            &format!("component {i} must be positive"),
-                        ));
-                    }
-                }
-                for (i, c) in r.cells.iter().enumerate() {
-                    if *c < 1 || *c > 100_000 {
-                        return Err(self.invalid(
-                            format!("{k}.cells"),
-                            format!("{:?}", r.cells),
-                            &format!("component {i} must be between 1 and 100000"),
-                        ));
-                    }
-                }
-                for i in 0..2 {
-                    let far = r.origin[i] + r.size[i];
-                    let cell = r.size[i] / r.cells[i] as f64;
-                    if !far.is_finite() || !cell.is_normal() || r.origin[i] + cell == r.origin[i] {
-                        return Err(self.invalid(
-                            format!("{k}.size"),
-                            format!("{:?}", r.size),
-                            &format!(
-                                "component {i}: origin + size = {far:e} and cell size {cell:e} must be \
-                                 finite and larger than the spacing of floating-point numbers at \
-                                 the origin"
-                            ),
-                        ));
-                    }
-                }
-                let area = (r.size[0] / r.cells[0] as f64) * (r.size[1] / r.cells[1] as f64);
-                if !area.is_normal() {
-                    return Err(self.invalid(
-                        format!("{k}.size"),
-                        format!("{:?}", r.size),
-                        &format!(
-                            "each cell's area ({area:e} m^2 with cells = {:?}) must be a finite, \
-                             normal floating-point number",
-                            r.cells
-                        ),
-                    ));
-                }
-                Ok(MeshSpec::Rectangle {
-                    origin: r.origin,
-                    size: r.size,
-                    cells: [r.cells[0] as usize, r.cells[1] as usize],
-                })
-            }
-            (None, Some(d)) => {
-                let k = format!("{key}.disk");
-                self.finite(&format!("{k}.center"), d.center[0])?;
-                self.finite(&format!("{k}.center"), d.center[1])?;
-                let radius = self.positive(&format!("{k}.radius"), d.radius)?;
-                if d.cells < 2 || d.cells > 20_000 {
-                    return Err(self.invalid(
-                        format!("{k}.cells"),
-                        d.cells.to_string(),
-                        "must be between 2 and 20000 (cells along a quarter circumference)",
-                    ));
-                }
-                let refine = match &d.refine {
-                    None => None,
-                    Some(r) => {
-                        let rk = format!("{k}.refine");
-                        let toward = self.unit(&format!("{rk}.toward"), r.toward)?;
-                        if !(r.ratio.is_finite() && (1.0..=1000.0).contains(&r.ratio)) {
-                            return Err(self.invalid(
-                                format!("{rk}.ratio"),
-                                r.ratio.to_string(),
-                                "must be between 1 and 1000 (uniform rim spacing over the spacing at the refined point)",
-                            ));
-                        }
-                        Some(DiskRefinement {
-                            toward,
-                            ratio: r.ratio,
-                        })
-                    }
-                };
-                Ok(MeshSpec::Disk {
-                    center: d.center,
-                    radius,
-                    cells: d.cells as usize,
-                    refine,
-                })
-            }
+            (Some(r), None) => self.rectangle(&format!("{key}.rectangle"), r),
+            (None, Some(d)) => self.disk(&format!("{key}.disk"), d),
             _ => Err(self.invalid(
                 key,
                 "{...}",
                 "give exactly one of `rectangle = {...}` or `disk = {...}`",
             )),
         }
+    }
+
+    /// A Gmsh mesh at `key`: the physical surface `group` of the file `gmsh` (relative to the
+    /// scene file's folder), read now.
+    fn gmsh_mesh(&self, key: &str, gmsh: Option<&str>, group: Option<&str>) -> Result<MeshSpec> {
+        let (Some(file), Some(group)) = (gmsh, group) else {
+            return Err(self.invalid(
+                key,
+                "{...}",
+                "a Gmsh mesh needs both `gmsh` (the .msh file) and `group` (a physical surface)",
+            ));
+        };
+        let path = self
+            .file
+            .parent()
+            .map_or_else(|| PathBuf::from(file), |d| d.join(file));
+        let read = crate::gmsh::read_bytes(&path)
+            .and_then(|bytes| crate::gmsh::read_surface(&bytes, group));
+        match read {
+            Ok(mesh) => Ok(MeshSpec::Gmsh {
+                file: path,
+                group: group.to_string(),
+                mesh,
+            }),
+            Err(problem) => Err(self.invalid(
+                format!("{key}.gmsh"),
+                format!("{file:?}"),
+                &format!("{}: {problem}", path.display()),
+            )),
+        }
+    }
+
+    /// An explicit mesh at `key`: its `nodes` finite, its `quads`' indices in range, no two
+    /// quads overlapping.
+    fn explicit_mesh(
+        &self,
+        key: &str,
+        nodes: Option<&[[f64; 2]]>,
+        quads: Option<&[[i64; 4]]>,
+    ) -> Result<MeshSpec> {
+        let (Some(nodes), Some(quads)) = (nodes, quads) else {
+            return Err(self.invalid(
+                key,
+                "{...}",
+                "an explicit mesh needs both `nodes` and `quads`",
+            ));
+        };
+        if quads.is_empty() {
+            return Err(self.invalid(format!("{key}.quads"), "[]", "no quads"));
+        }
+        for (i, p) in nodes.iter().enumerate() {
+            if !(p[0].is_finite() && p[1].is_finite()) {
+                return Err(self.invalid(
+                    format!("{key}.nodes[{i}]"),
+                    format!("{p:?}"),
+                    "must be finite",
+                ));
+            }
+        }
+        let mut out = Vec::with_capacity(quads.len());
+        for (i, q) in quads.iter().enumerate() {
+            if q.iter().any(|&n| n < 0 || n as usize >= nodes.len()) {
+                return Err(self.invalid(
+                    format!("{key}.quads[{i}]"),
+                    format!("{q:?}"),
+                    &format!("node index out of range (0..{})", nodes.len()),
+                ));
+            }
+            out.push(q.map(|n| n as u32));
+        }
+        // In a mesh of counter-clockwise quads each directed edge belongs to one quad at most:
+        // a second one lies on the same side of it (a duplicate or overlapping quad).
+        let mut edges = std::collections::HashMap::with_capacity(4 * out.len());
+        for (i, q) in out.iter().enumerate() {
+            for k in 0..4 {
+                let e = (q[k], q[(k + 1) % 4]);
+                if e.0 == e.1 {
+                    // The collapsed side of a triangle [a, b, c, c] (a repeated node
+                    // elsewhere is refused when the model is built).
+                    continue;
+                }
+                if let Some(j) = edges.insert(e, i) {
+                    return Err(self.invalid(
+                        format!("{key}.quads[{i}]"),
+                        format!("{:?}", quads[i]),
+                        &format!(
+                            "overlaps quads[{j}] = {:?}: both have the edge from node {} to \
+                             node {} on the same side (a duplicate or overlapping quad)",
+                            quads[j], e.0, e.1
+                        ),
+                    ));
+                }
+            }
+        }
+        // Quads that overlap without sharing an edge (one laid over others).
+        if let Some((i, j)) = crate::geometry::overlapping_quads(nodes, &out) {
+            return Err(self.invalid(
+                format!("{key}.quads[{j}]"),
+                format!("{:?}", quads[j]),
+                &format!(
+                    "overlaps quads[{i}] = {:?}: their interiors intersect (a quad laid over \
+                     others; quads may share edges and corners only)",
+                    quads[i]
+                ),
+            ));
+        }
+        Ok(MeshSpec::Explicit {
+            nodes: nodes.to_vec(),
+            quads: out,
+        })
+    }
+
+    /// A `rectangle` at `k`.
+    fn rectangle(&self, k: &str, r: &RawRectangle) -> Result<MeshSpec> {
+        self.finite_all(&format!("{k}.origin"), &r.origin)?;
+        for (i, s) in r.size.iter().enumerate() {
+            if !(s.is_finite() && *s > 0.0) {
+                return Err(self.invalid(
+                    format!("{k}.size"),
+                    format!("{:?}", r.size),
+                    &format!("component {i} must be positive"),
+                ));
+            }
+        }
+        for (i, c) in r.cells.iter().enumerate() {
+            if *c < 1 || *c > 100_000 {
+                return Err(self.invalid(
+                    format!("{k}.cells"),
+                    format!("{:?}", r.cells),
+                    &format!("component {i} must be between 1 and 100000"),
+                ));
+            }
+        }
+        for i in 0..2 {
+            let far = r.origin[i] + r.size[i];
+            let cell = r.size[i] / r.cells[i] as f64;
+            if !far.is_finite() || !cell.is_normal() || r.origin[i] + cell == r.origin[i] {
+                return Err(self.invalid(
+                    format!("{k}.size"),
+                    format!("{:?}", r.size),
+                    &format!(
+                        "component {i}: origin + size = {far:e} and cell size {cell:e} must be \
+                         finite and larger than the spacing of floating-point numbers at \
+                         the origin"
+                    ),
+                ));
+            }
+        }
+        let area = (r.size[0] / r.cells[0] as f64) * (r.size[1] / r.cells[1] as f64);
+        if !area.is_normal() {
+            return Err(self.invalid(
+                format!("{k}.size"),
+                format!("{:?}", r.size),
+                &format!(
+                    "each cell's area ({area:e} m^2 with cells = {:?}) must be a finite, \
+                     normal floating-point number",
+                    r.cells
+                ),
+            ));
+        }
+        Ok(MeshSpec::Rectangle {
+            origin: r.origin,
+            size: r.size,
+            cells: [r.cells[0] as usize, r.cells[1] as usize],
+        })
+    }
+
+    /// A `disk` at `k`.
+    fn disk(&self, k: &str, d: &RawDisk) -> Result<MeshSpec> {
+        self.finite_all(&format!("{k}.center"), &d.center)?;
+        let radius = self.positive(&format!("{k}.radius"), d.radius)?;
+        if d.cells < 2 || d.cells > 20_000 {
+            return Err(self.invalid(
+                format!("{k}.cells"),
+                d.cells.to_string(),
+                "must be between 2 and 20000 (cells along a quarter circumference)",
+            ));
+        }
+        let refine = match &d.refine {
+            None => None,
+            Some(r) => {
+                let rk = format!("{k}.refine");
+                let toward = self.unit(&format!("{rk}.toward"), r.toward)?;
+                if !(r.ratio.is_finite() && (1.0..=1000.0).contains(&r.ratio)) {
+                    return Err(self.invalid(
+                        format!("{rk}.ratio"),
+                        r.ratio.to_string(),
+                        "must be between 1 and 1000 (uniform rim spacing over the spacing at the refined point)",
+                    ));
+                }
+                Some(DiskRefinement {
+                    toward,
+                    ratio: r.ratio,
+                })
+            }
+        };
+        Ok(MeshSpec::Disk {
+            center: d.center,
+            radius,
+            cells: d.cells as usize,
+            refine,
+        })
     }
 }

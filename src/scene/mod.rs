@@ -140,13 +140,20 @@ impl Scene {
     /// # Errors
     /// As [`Scene::load`], without the read error.
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
-        let raw: RawScene = toml::from_str(text).map_err(|e| Error::Parse {
-            file: path.to_path_buf(),
-            message: toml_message(text, &e),
-        })?;
-        let v = Validator { file: path };
-        v.scene(raw)
+        let raw = decode(text, path)?;
+        Validator { file: path }.scene(raw)
     }
+}
+
+/// The tables of scene text `text` (from `path`), decoded: TOML syntax, the tables' shapes and
+/// unknown keys checked, an error quoting its line ([`toml_message`]). Every scene passes here
+/// before its values are validated: a step that edits the tables first (a key overridden by its
+/// path) belongs here.
+fn decode(text: &str, path: &Path) -> Result<RawScene> {
+    toml::from_str(text).map_err(|e| Error::Parse {
+        file: path.to_path_buf(),
+        message: toml_message(text, &e),
+    })
 }
 
 /// Characters of the offending line quoted on either side of a TOML error's column.
@@ -242,10 +249,5 @@ pub fn invalid(
     value: impl Into<String>,
     reason: &str,
 ) -> Error {
-    Error::Invalid {
-        file: scene.file.clone(),
-        key: key.into(),
-        value: value.into(),
-        reason: reason.to_string(),
-    }
+    Validator { file: &scene.file }.invalid(key, value, reason)
 }

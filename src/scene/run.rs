@@ -4,7 +4,7 @@
 
 use serde::Deserialize;
 
-use super::validate::{fmt_num, Validator};
+use super::validate::{fmt_num, number, Validator};
 use crate::error::Result;
 
 /// Default safety factor on the stable time step.
@@ -92,6 +92,7 @@ pub struct RunSettings {
 }
 
 impl Validator<'_> {
+    /// The `[run]` table.
     pub(super) fn run(&self, r: &RawRun) -> Result<RunSettings> {
         let end_time = self.positive("run.end_time", r.end_time)?;
         let time_step_scale = match r.time_step_scale {
@@ -125,19 +126,17 @@ impl Validator<'_> {
             .field_interval
             .map(|f| self.positive("run.field_interval", f))
             .transpose()?;
-        let field_format = match r.field_format.as_deref() {
-            None | Some("binary") => FieldFormat::Binary,
-            Some("binary64") => FieldFormat::Binary64,
-            Some("ascii") => FieldFormat::Ascii,
-            Some(other) => {
-                return Err(self.invalid(
-                    "run.field_format",
-                    format!("{other:?}"),
-                    "expected \"binary\" (zlib-compressed, single precision, the default), \"binary64\" \
-                     (the same in double precision) or \"ascii\"",
-                ))
-            }
-        };
+        let field_format = self.keyword(
+            "run.field_format",
+            r.field_format.as_deref(),
+            &[
+                ("binary", FieldFormat::Binary),
+                ("binary64", FieldFormat::Binary64),
+                ("ascii", FieldFormat::Ascii),
+            ],
+            "expected \"binary\" (zlib-compressed, single precision, the default), \"binary64\" \
+             (the same in double precision) or \"ascii\"",
+        )?;
         let checkpoint_interval = r
             .checkpoint_interval
             .map(|c| self.positive("run.checkpoint_interval", c))
@@ -186,10 +185,7 @@ impl Validator<'_> {
             None => [0.0; 2],
             Some(v) => {
                 let pair = v.as_array().and_then(|a| match a.as_slice() {
-                    [x, y] => Some([
-                        x.as_float().or(x.as_integer().map(|i| i as f64))?,
-                        y.as_float().or(y.as_integer().map(|i| i as f64))?,
-                    ]),
+                    [x, y] => Some([number(x)?, number(y)?]),
                     _ => None,
                 });
                 let Some(g) = pair else {
