@@ -16,6 +16,7 @@ pub const NAME_MAX: usize = 64;
 /// Default hourglass coefficient.
 pub const DEFAULT_HOURGLASS_COEFFICIENT: f64 = 0.1;
 
+/// A `[[body]]` table as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawBody {
@@ -32,6 +33,7 @@ pub(super) struct RawBody {
     hourglass: Option<RawHourglass>,
 }
 
+/// The `hourglass` table of a body.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawHourglass {

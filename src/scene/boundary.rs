@@ -10,6 +10,7 @@ use super::fixed;
 use super::validate::{fmt_num, Validator};
 use crate::error::Result;
 
+/// A `[[pressure]]` table as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawPressure {
@@ -19,6 +20,7 @@ pub(super) struct RawPressure {
     ramp: Option<f64>,
 }
 
+/// A `[[boundary]]` table as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawBoundary {
@@ -27,6 +29,7 @@ pub(super) struct RawBoundary {
     velocity: RawVelocity,
 }
 
+/// The `region` of a boundary or pressure: a box, or a Gmsh group.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawRegion {
@@ -37,6 +40,7 @@ struct RawRegion {
     group: Option<String>,
 }
 
+/// The `velocity` of a boundary.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawVelocity {

@@ -14,6 +14,7 @@ use crate::error::Result;
 /// Longest contact or rigid-wall name (characters): it heads four `history.csv` columns.
 pub const CONTACT_NAME_MAX: usize = 256;
 
+/// A `[[contact]]` table as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawContact {
@@ -74,6 +75,7 @@ enum RawBodies {
     List(Vec<String>),
 }
 
+/// A `[[rigid_wall]]` table as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawWall {

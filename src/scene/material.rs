@@ -8,6 +8,8 @@ use serde::Deserialize;
 use super::validate::{fmt_num, number, Validator};
 use crate::error::Result;
 
+/// A `[[material]]` table as written (`johnson_cook` kept as a TOML value, checked key by key
+/// below).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawMaterial {

@@ -11,6 +11,7 @@ use super::fixed;
 use super::validate::Validator;
 use crate::error::Result;
 
+/// The `mesh` table of a body as written: one of its four forms.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawMesh {
@@ -24,6 +25,7 @@ pub(super) struct RawMesh {
     group: Option<String>,
 }
 
+/// The `rectangle` of a mesh.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawRectangle {
@@ -35,6 +37,7 @@ struct RawRectangle {
     cells: [i64; 2],
 }
 
+/// The `disk` of a mesh.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawDisk {
@@ -45,6 +48,7 @@ struct RawDisk {
     refine: Option<RawRefine>,
 }
 
+/// The `refine` of a disk.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawRefine {

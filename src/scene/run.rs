@@ -22,6 +22,7 @@ pub const BULK_QUADRATIC_MAX: f64 = 10.0;
 /// Default bound on the relative energy-balance error before a run is stopped.
 pub const DEFAULT_ENERGY_ERROR_LIMIT: f64 = 0.05;
 
+/// The `[run]` table as written (`gravity` kept as a TOML value, its shape checked below).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawRun {
@@ -39,6 +40,7 @@ pub(super) struct RawRun {
     gravity_ramp: Option<f64>,
 }
 
+/// The `bulk_viscosity` table of `[run]`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawBulk {

@@ -148,14 +148,14 @@ impl Validator<'_> {
 
     /// The physical group `name` of the Gmsh file `body` was read from, among those whose
     /// dimension `dim_ok` accepts, with that file; at `key`, a body not read from a Gmsh file is
-    /// refused as `use_` ("a region by name"), an unknown name as not one of `kind` ("physical
+    /// refused as `by_name` ("a region by name"), an unknown name as not one of `kind` ("physical
     /// curve or point"), listing those there.
     pub(super) fn mesh_group<'b>(
         &self,
         key: &str,
         name: &str,
         body: &'b Body,
-        use_: &str,
+        by_name: &str,
         kind: &str,
         dim_ok: impl Fn(i32) -> bool,
     ) -> Result<(&'b Path, &'b NodeGroup)> {
@@ -164,7 +164,7 @@ impl Validator<'_> {
                 key,
                 format!("{name:?}"),
                 &format!(
-                    "body {:?} is not read from a Gmsh file: {use_} is a {kind} of the body's \
+                    "body {:?} is not read from a Gmsh file: {by_name} is a {kind} of the body's \
                      mesh file",
                     body.name
                 ),
