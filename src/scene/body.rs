@@ -78,7 +78,7 @@ pub struct Hourglass {
 pub struct Body {
     /// Name.
     pub name: String,
-    /// Index into [`Scene::materials`].
+    /// Index into [`Scene::materials`](super::Scene::materials).
     pub material: usize,
     /// Plane strain or plane stress.
     pub formulation: Formulation,

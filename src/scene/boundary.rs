@@ -103,7 +103,7 @@ impl LoadCurve {
 /// A prescribed velocity on the nodes of a body inside a box.
 #[derive(Debug, Clone)]
 pub struct Boundary {
-    /// Index into [`Scene::bodies`].
+    /// Index into [`Scene::bodies`](super::Scene::bodies).
     pub body: usize,
     /// Box lower corner.
     pub min: [f64; 2],
@@ -139,7 +139,7 @@ pub struct RegionGroup {
 /// A pressure (traction) load on the boundary edges of a body inside a box.
 #[derive(Debug, Clone)]
 pub struct Pressure {
-    /// Index into [`Scene::bodies`].
+    /// Index into [`Scene::bodies`](super::Scene::bodies).
     pub body: usize,
     /// Box lower corner.
     pub min: [f64; 2],
