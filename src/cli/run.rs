@@ -101,6 +101,23 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             );
         }
     }
+    if s.contact_unconverged > 0 {
+        let tolerance = if s.backend == "gpu" {
+            ricochet::gpu::contact::solve::TOLERANCE
+        } else {
+            ricochet::contact::SWEEP_TOLERANCE
+        };
+        eprintln!(
+            "warning: the Lagrange contact did not converge in {} of {} steps: their sweeps \
+             stopped at the limit ({} a solve) with a residual up to {:.2e} of the search margin \
+             (the largest gap change of a step's last sweep; tolerance {:.0e})",
+            s.contact_unconverged,
+            s.steps,
+            ricochet::contact::MAX_SWEEPS,
+            s.contact_residual_max,
+            tolerance
+        );
+    }
     let failed = match &outcome.ending {
         Ending::Interrupted(_) => {
             eprintln!(
