@@ -63,6 +63,9 @@ pub enum Error {
     /// The GPU backend could not be used.
     #[error("GPU: {0}")]
     Gpu(String),
+    /// A study could not run its cases, submit them to Slurm or find its threshold.
+    #[error("study: {0}")]
+    Study(String),
 }
 
 /// Characters of the key and of the value shown in the message of [`Error::Invalid`].

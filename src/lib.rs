@@ -26,7 +26,7 @@
 //! 8. [`output`]; [`gpu`]
 //! 9. [`checkpoint`]; [`plot`]
 //! 10. [`run`]
-//! 11. [`verify`]; [`bench`]
+//! 11. [`verify`]; [`bench`]; [`study`] (many runs of one scene, here or on Slurm)
 //!
 //! What two layers share lives in the lower one: the corner geometry that the scene's mesh
 //! checks, the model, the contact and the element read is in [`geometry`]; the element is below
@@ -54,6 +54,7 @@ pub mod plot;
 pub mod run;
 pub mod scene;
 pub mod step;
+pub mod study;
 pub mod verify;
 
 pub use error::{Error, Result};

@@ -7,7 +7,8 @@
 //! (`[run]`), `material.rs` (`[[material]]`), `body.rs` (`[[body]]`) and `mesh.rs` (its
 //! `mesh`), `boundary.rs` (`[[boundary]]`, `[[pressure]]`, regions and load curves),
 //! `contact.rs` (`[[contact]]`, `[[rigid_wall]]`). `validate.rs` holds the validator and the
-//! checks the tables share, `fixed.rs` the strict fixed-length arrays. This module reads the
+//! checks the tables share, `fixed.rs` the strict fixed-length arrays; [`overrides`] sets keys
+//! by their path before the tables are decoded (what a study varies). This module reads the
 //! file, decodes its tables, has them validated in order and assembles the [`Scene`]; every
 //! public type is re-exported here. Host-side only, no GPU twin: the GPU reads the model built
 //! from a scene ([`crate::model`]).
@@ -24,6 +25,7 @@ mod contact;
 mod fixed;
 mod material;
 mod mesh;
+pub mod overrides;
 mod run;
 mod validate;
 
@@ -142,6 +144,21 @@ impl Scene {
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
         let raw = decode(text, path)?;
         Validator { file: path }.scene(raw)
+    }
+
+    /// Parses and validates scene text with keys overridden by their path
+    /// ([`overrides::materialise`], then [`Scene::parse`] of the text that gives): every check of
+    /// the scene applies to the overridden values. Without overrides, [`Scene::parse`].
+    ///
+    /// # Errors
+    /// As [`Scene::parse`], and [`Error::Invalid`] naming an override's key and value when it
+    /// cannot be set.
+    pub fn parse_with(text: &str, path: &Path, overrides: &[overrides::Override]) -> Result<Self> {
+        if overrides.is_empty() {
+            return Self::parse(text, path);
+        }
+        let text = overrides::materialise(text, path, overrides)?;
+        Self::parse(&text, path)
     }
 }
 
