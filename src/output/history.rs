@@ -69,40 +69,6 @@ impl EnergyAudit {
     }
 }
 
-/// The columns of `history.csv` (its header), for the bodies `bodies` and the contacts and rigid
-/// walls `contacts`, with the `plastic_work` and `friction_work` columns when `plastic` and
-/// `friction` (see [`HistoryWriter::create`]).
-pub fn header(
-    bodies: &[String],
-    contacts: &[String],
-    plastic: bool,
-    friction: bool,
-) -> Vec<String> {
-    let mut columns: Vec<String> = Vec::new();
-    for c in COLUMNS {
-        columns.push(c.to_string());
-        if c == "viscous_work" && plastic {
-            columns.push("plastic_work".into());
-        }
-        if c == "contact_energy" && friction {
-            columns.push("friction_work".into());
-        }
-    }
-    for b in bodies {
-        columns.push(format!("{b}.vx"));
-        columns.push(format!("{b}.vy"));
-    }
-    for c in contacts {
-        for what in ["fx", "fy", "max_penetration", "active_nodes"] {
-            columns.push(format!("{c}.{what}"));
-        }
-        if friction {
-            columns.push(format!("{c}.ft"));
-        }
-    }
-    columns
-}
-
 /// Writes `history.csv` row by row.
 pub struct HistoryWriter {
     path: PathBuf,
@@ -147,7 +113,25 @@ impl HistoryWriter {
         if per_radian {
             w.line(PER_RADIAN)?;
         }
-        w.line(&header(bodies, contacts, plastic, friction).join(","))?;
+        let mut header = COLUMNS.join(",");
+        if plastic {
+            header = header.replace(",viscous_work,", ",viscous_work,plastic_work,");
+        }
+        if friction {
+            header = header.replace(",contact_energy,", ",contact_energy,friction_work,");
+        }
+        for b in bodies {
+            header.push_str(&format!(",{b}.vx,{b}.vy"));
+        }
+        for c in contacts {
+            header.push_str(&format!(
+                ",{c}.fx,{c}.fy,{c}.max_penetration,{c}.active_nodes"
+            ));
+            if friction {
+                header.push_str(&format!(",{c}.ft"));
+            }
+        }
+        w.line(&header)?;
         Ok(w)
     }
 
