@@ -268,6 +268,9 @@ pub fn xy_chart(
     y_desc: &str,
     series: &[series::Series],
 ) -> Result<()> {
+    if !style::register_font() {
+        return Err(Error::Plot("the embedded font is invalid".into()));
+    }
     match format {
         Format::Png => {
             let rgb = raster(charts::SIZE, path, |root| {
