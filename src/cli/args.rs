@@ -59,7 +59,9 @@ pub struct RunArgs {
     /// Override run.end_time.
     #[arg(long)]
     pub end_time: Option<f64>,
-    /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
+    /// Adapter: an index (0, 1, ...: discrete first, then by PCI bus id), a PCI bus id
+    /// (0000:3b:00.0) or a name substring; also by name from WGPU_ADAPTER_NAME. Within
+    /// CUDA_VISIBLE_DEVICES / ROCR_VISIBLE_DEVICES when set.
     #[arg(long)]
     pub adapter: Option<String>,
     /// Then draw the pictures of the run (as `ricochet plot OUT`).

@@ -1,4 +1,5 @@
-//! Studies: many runs of one scene (README, "Studies"). A study file ([`spec`]) names a base
+//! Studies: many runs of one scene (README, "Studies"). A study file ([`spec`], its checks in
+//! [`validate`]) names a base
 //! scene, the scene keys it varies (overridden by [`crate::scene::overrides`]) and the figures
 //! to collect; [`cases`] makes its cases (a grid, lists side by side, a seeded Latin hypercube)
 //! and writes each one's materialised scene and manifest under `DIR/cases/<id>/`; [`local`] runs
@@ -17,6 +18,7 @@ pub mod plot;
 pub mod slurm;
 pub mod spec;
 pub mod threshold;
+pub mod validate;
 
 pub use cases::{Case, Manifest, Record};
 pub use collect::{collect, CaseStatus, Results};
