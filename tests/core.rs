@@ -4,6 +4,8 @@
 //!
 //! - [`patch`]: constant-strain patch tests (single quad, distorted patches, a Gmsh mesh), exact stress;
 //! - [`gmsh`]: the shipped Gmsh MSH 4.1 meshes (counts, ASCII against binary, orientation);
+//! - [`mesh_files`]: hostile and unusual mesh files: any binary data size, streams and FIFOs,
+//!   nodes found by their tags (permuted, repeated, 0, out of range), numbered physical groups;
 //! - [`rigid`]: rigid translation and (large) rotation of neo-Hookean elements, spinning disk;
 //! - [`hourglass`]: hourglass modes, their control (stiffness, viscous) and reported energy;
 //! - [`load_curve`]: velocities and pressures as tables of (time, value), the pulled bar's closed form;
@@ -82,6 +84,8 @@ mod layout;
 mod load_curve;
 #[path = "core/mass.rs"]
 mod mass;
+#[path = "core/mesh_files.rs"]
+mod mesh_files;
 #[path = "core/outputs.rs"]
 mod outputs;
 #[path = "core/patch.rs"]
