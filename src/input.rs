@@ -1,5 +1,6 @@
 //! Files read whole, within a cap decided before the read: a mesh file, a checkpoint, a run's
-//! output files read back by `plot`, a verification case. [`read_capped`] refuses what is not a
+//! output files read back by `plot`, a verification case, `/proc/meminfo`
+//! ([`available_memory`]). [`read_capped`] refuses what is not a
 //! regular file (a FIFO, a device such as `/dev/zero`, a folder) before opening it, refuses a
 //! file whose size is over the cap, and reads through [`std::io::Read::take`] so that a file
 //! growing while it is read (or lying about its size) still stops at the cap. Host-side only.
@@ -36,6 +37,16 @@ pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>, String> {
         return Err(too_big(bytes.len() as u64));
     }
     Ok(bytes)
+}
+
+/// The memory this machine has available (`MemAvailable` of `/proc/meminfo`), if known.
+pub fn available_memory() -> Option<u64> {
+    let text = read_capped(Path::new("/proc/meminfo"), 1 << 20)
+        .ok()
+        .and_then(|b| String::from_utf8(b).ok())?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// A byte count in the largest binary unit that divides it (`64 MiB`, `1 GiB`, `100 bytes`).

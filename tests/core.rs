@@ -43,6 +43,10 @@
 //!   GIF frames, the colour of the patch test's uniform stress, refused folders and fields;
 //! - [`restart`]: checkpoints and `run --restart` give the outputs of the run never stopped, bit
 //!   for bit, after a crash and after an interruption, with contact; bad checkpoints exit 2;
+//! - [`checkpoint_checks`]: checkpoints that are streams or huge, another run's, damaged, or
+//!   whose mesh, `history.csv` or `fields/` changed since: exit 2 naming the file;
+//! - [`output_lock`]: a second run or restart into an output folder in use exits 2 naming the
+//!   folder and the process; a lock left by a process that ended does not block;
 //! - [`run_library`]: the run as a library call (`run::execute`): progress reported, an interrupt
 //!   flag giving an `interrupted` outcome and summary, and a restart through the same call;
 //! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound;
@@ -62,6 +66,8 @@ mod augmented;
 mod axisymmetric;
 #[path = "core/bad_input.rs"]
 mod bad_input;
+#[path = "core/checkpoint_checks.rs"]
+mod checkpoint_checks;
 #[path = "core/contact.rs"]
 mod contact;
 #[path = "core/energy.rs"]
@@ -86,6 +92,8 @@ mod load_curve;
 mod mass;
 #[path = "core/mesh_files.rs"]
 mod mesh_files;
+#[path = "core/output_lock.rs"]
+mod output_lock;
 #[path = "core/outputs.rs"]
 mod outputs;
 #[path = "core/patch.rs"]
