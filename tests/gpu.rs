@@ -1102,6 +1102,8 @@ mod traction;
 
 #[path = "gpu/contact.rs"]
 mod contact;
+#[path = "gpu/end_time.rs"]
+mod end_time;
 #[path = "gpu/general.rs"]
 mod general;
 #[path = "gpu/patch.rs"]
