@@ -38,6 +38,8 @@
 //! - [`fuzz`]: 2000 mutants of the scenes of `assets/` through the load path and a short CPU run
 //!   (and a sample through `ricochet check`): no panic, hang, escaped file, unbounded memory or
 //!   non-finite number in a completed run;
+//! - [`fuzz_files`]: mutated mesh files, checkpoints and output folders: refused naming the
+//!   file, or run to a whole history; nothing hangs;
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs;
 //! - [`plot`]: `ricochet plot` and `run --plots`: every picture at its size, identical bytes twice,
 //!   GIF frames, the colour of the patch test's uniform stress, refused folders and fields;
@@ -76,6 +78,8 @@ mod energy;
 mod friction;
 #[path = "core/fuzz.rs"]
 mod fuzz;
+#[path = "core/fuzz_files.rs"]
+mod fuzz_files;
 #[path = "core/general_contact.rs"]
 mod general_contact;
 #[path = "core/gmsh.rs"]
