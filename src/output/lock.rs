@@ -44,9 +44,9 @@ impl OutputLock {
                 .open(&path)
                 .map_err(write_err)?;
             if !lock(&file) {
-                let holder = std::fs::read_to_string(&path)
+                let holder = crate::input::read_capped(&path, 64)
                     .ok()
-                    .map(|s| s.trim().to_string())
+                    .map(|b| String::from_utf8_lossy(&b).trim().to_string())
                     .filter(|s| !s.is_empty())
                     .unwrap_or_else(|| "unknown".into());
                 return Err(Error::InUse {
