@@ -5,12 +5,12 @@
 
 use std::time::Instant;
 
+use crate::element::{evaluate_with, Dissipation};
 use crate::error::{Error, Result};
+use crate::geometry::{quad_geometry, QuadGeometry};
 use crate::gpu::GpuSolver;
 use crate::model::Model;
 use crate::step::cpu::CpuSolver;
-use crate::element::{evaluate_with, Dissipation};
-use crate::geometry::{quad_geometry, QuadGeometry};
 use crate::step::Solver;
 
 /// Rounds by default: each variant is timed this many times, alternating, and medians reported.
