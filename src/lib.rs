@@ -15,7 +15,8 @@
 //! below (`tests/core/layout.rs` checks that their dependencies, and those between the modules
 //! inside [`step`], [`contact`] and [`gpu`], form no circle):
 //!
-//! 1. [`error`]; [`geometry`] (the element's geometry, pure functions of its corners)
+//! 1. [`error`]; [`geometry`] (the element's geometry, pure functions of its corners);
+//!    [`input`] (files read whole within a cap)
 //! 2. [`gmsh`] (Gmsh mesh files)
 //! 3. [`scene`]
 //! 4. [`mesh`] (generated meshes); [`element`] (a body's element parameters, the material
@@ -46,6 +47,7 @@ pub mod error;
 pub mod geometry;
 pub mod gmsh;
 pub mod gpu;
+pub mod input;
 pub mod mesh;
 pub mod model;
 pub mod output;

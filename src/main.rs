@@ -42,6 +42,7 @@ fn main() -> ExitCode {
                             | ricochet::Error::Parse { .. }
                             | ricochet::Error::Invalid { .. }
                             | ricochet::Error::Checkpoint(_)
+                            | ricochet::Error::InUse { .. }
                     )
                 })
                 .unwrap_or(false);

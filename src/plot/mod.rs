@@ -184,7 +184,10 @@ pub fn check_folder(dir: &Path) -> Result<()> {
 
 /// The scene name and status of `summary.json` when there is one ("interrupted" when not).
 fn run_label(dir: &Path) -> String {
-    let Ok(text) = std::fs::read_to_string(dir.join("summary.json")) else {
+    let text = crate::input::read_capped(&dir.join("summary.json"), 1 << 20)
+        .ok()
+        .and_then(|b| String::from_utf8(b).ok());
+    let Some(text) = text else {
         return "no summary.json: interrupted run".into();
     };
     let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();

@@ -105,18 +105,28 @@ impl Scene {
 }
 
 impl Scene {
-    /// Reads and validates a scene file.
+    /// Reads and validates a scene file ([`Scene::read_text`], then [`Scene::parse`]).
     ///
     /// # Errors
     /// [`Error::Read`] when the file cannot be read, [`Error::Parse`] for TOML and shape errors
     /// (unknown keys included), [`Error::Invalid`] for values that are out of range.
     pub fn load(path: &Path) -> Result<Self> {
+        Self::parse(&Self::read_text(path)?, path)
+    }
+
+    /// The text of a scene file, at most [`SCENE_MAX_BYTES`] of it (a stream such as
+    /// `/dev/zero`, or a runaway file, is refused when the cap is reached, not read until memory
+    /// runs out; a pipe is read as a scene).
+    ///
+    /// # Errors
+    /// [`Error::Read`] when the file cannot be read, [`Error::Parse`] when it is larger than the
+    /// cap or not UTF-8 text.
+    pub fn read_text(path: &Path) -> Result<String> {
         use std::io::Read as _;
         let read_err = |source| Error::Read {
             file: path.to_path_buf(),
             source,
         };
-        // Bounded: `/dev/zero` or a runaway file is refused, not read until memory runs out.
         let mut bytes = Vec::new();
         std::fs::File::open(path)
             .and_then(|f| f.take(SCENE_MAX_BYTES + 1).read_to_end(&mut bytes))
@@ -130,11 +140,10 @@ impl Scene {
                 ),
             });
         }
-        let text = String::from_utf8(bytes).map_err(|e| Error::Parse {
+        String::from_utf8(bytes).map_err(|e| Error::Parse {
             file: path.to_path_buf(),
             message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
-        })?;
-        Self::parse(&text, path)
+        })
     }
 
     /// Parses and validates scene text; `path` is used for the name and in messages.
