@@ -107,14 +107,17 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         } else {
             ricochet::contact::SWEEP_TOLERANCE
         };
+        let residual = match s.contact_residual_max {
+            Some(r) => format!("with a residual up to {r:.2e} of the search margin"),
+            None => "(this backend does not measure the residual)".to_string(),
+        };
         eprintln!(
             "warning: the Lagrange contact did not converge in {} of {} steps: their sweeps \
-             stopped at the limit ({} a solve) with a residual up to {:.2e} of the search margin \
-             (the largest gap change of a step's last sweep; tolerance {:.0e})",
+             stopped at the limit ({} a solve) {residual} (the largest gap change of a step's \
+             last sweep; tolerance {:.0e})",
             s.contact_unconverged,
             s.steps,
             ricochet::contact::MAX_SWEEPS,
-            s.contact_residual_max,
             tolerance
         );
     }
