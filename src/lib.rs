@@ -7,7 +7,7 @@
 //! central-difference method, on the CPU reference path ([`step::cpu`]: the [`element`] forces,
 //! the node update, the [`contact`] correction) or on the GPU ([`gpu`]); [`run`] drives a solver
 //! and writes the [`output`] (and the [`checkpoint`]s), which [`plot`] draws; [`verify`] and
-//! [`bench`] run whole scenes.
+//! [`bench`](mod@bench) run whole scenes.
 //!
 //! ## Layers
 //!
@@ -26,7 +26,7 @@
 //! 8. [`output`]; [`gpu`]
 //! 9. [`checkpoint`]; [`plot`]
 //! 10. [`run`]
-//! 11. [`verify`]; [`bench`]
+//! 11. [`verify`]; [`bench`](mod@bench)
 //!
 //! What two layers share lives in the lower one: the corner geometry that the scene's mesh
 //! checks, the model, the contact and the element read is in [`geometry`]; the element is below

@@ -163,8 +163,8 @@ const QUOTE_CHARS: usize = 60;
 const MESSAGE_CHARS: usize = 1000;
 
 /// A TOML error as the parser renders it (line, column, the line with a caret under the column,
-/// the message), with the quoted line cut to [`QUOTE_CHARS`] characters either side of the column
-/// and the message to [`MESSAGE_CHARS`]: the parser quotes the whole line and the whole value,
+/// the message), with the quoted line cut to `QUOTE_CHARS` (60) characters either side of the column
+/// and the message to `MESSAGE_CHARS` (1 000): the parser quotes the whole line and the whole value,
 /// and one line can hold a whole mesh (the nodes of `assets/ring_crush.toml` are one line of
 /// 16 KB), so a typo there gave a message the size of the file.
 pub fn toml_message(text: &str, e: &toml::de::Error) -> String {
