@@ -1104,6 +1104,10 @@ mod traction;
 mod contact;
 #[path = "gpu/device.rs"]
 mod device;
+#[path = "gpu/end_time.rs"]
+mod end_time;
+#[path = "gpu/fuzz.rs"]
+mod fuzz;
 #[path = "gpu/general.rs"]
 mod general;
 #[path = "gpu/patch.rs"]

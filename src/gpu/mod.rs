@@ -5,12 +5,15 @@
 //! [`node`] (gather, central-difference update, energies on sample steps), [`boundary`]
 //! (prescribed velocities), [`loads`] (pressure loads, mass-damping work), [`contact`] (the
 //! contact stage by file: search, narrow phase, the Lagrange correction, reports). [`kernels::Kernels`] holds the compiled pipelines,
-//! [`state::GpuState`] the buffers, [`solver::GpuSolver`] drives them in batches of steps.
+//! [`state::GpuState`] the buffers, [`solver::GpuSolver`] drives them in batches of steps;
+//! [`context`] opens the adapter that [`choice`] picks (by index, PCI bus id or name, within
+//! `CUDA_VISIBLE_DEVICES` / `ROCR_VISIBLE_DEVICES`).
 //! All sums are gathers or fixed-order trees: the same scene on the same adapter gives the same bits.
 
 mod alloc;
 pub mod boundary;
 mod checkpoint;
+pub mod choice;
 pub mod contact;
 pub mod context;
 pub mod control;
