@@ -1102,6 +1102,8 @@ mod traction;
 
 #[path = "gpu/contact.rs"]
 mod contact;
+#[path = "gpu/device.rs"]
+mod device;
 #[path = "gpu/end_time.rs"]
 mod end_time;
 #[path = "gpu/fuzz.rs"]

@@ -166,7 +166,7 @@ fn contact_rows(
 
 /// Builds the model, plan and schedule of a contact scene variant (`friction`: the Coulomb
 /// coefficient put on its contacts and walls, see [`with_friction`]).
-fn contact_build(
+pub(super) fn contact_build(
     which: ContactScene,
     size: usize,
     contact: bool,

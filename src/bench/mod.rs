@@ -12,15 +12,26 @@
 //! second) with the rounds, the bare loop and the CPU and GPU solvers of `timing`, and printed by
 //! `table`. Each bench times the CPU reference ([`crate::step::cpu`]) or its GPU twin
 //! ([`crate::gpu`]), or both.
+//!
+//! For the device check (`benches/device.sh`), GPU only: [`probe`](mod@probe) reports what the
+//! adapter reaches (a copy's bandwidth, the dispatch floor; kernels in [`crate::gpu::probe`]),
+//! [`profile`](mod@profile) where a step's device time goes by part, and [`bytes`] the bytes
+//! each kernel of a step moves (BENCHMARKS.md's traffic table).
 
 mod block;
+pub mod bytes;
 mod contact;
+pub mod probe;
+pub mod profile;
 mod scenes;
 mod table;
 mod timing;
 
 pub use block::{cpu, gpu};
+pub use bytes::block_bytes_per_element_cycle;
 pub use contact::{both_contact, cpu_contact, gpu_contact, ContactTiming, DEFAULT_WARMUP};
+pub use probe::{probe, probe_summary, ProbeReport};
+pub use profile::{no_timestamps, profile, profile_table, ProfileReport, ProfileRow, ProfileScene};
 pub use scenes::{
     bench_schedule, block_text, contact_scene, contact_text, disk_elements, pile_scene, pile_text,
     scene, striker_scene, striker_text, with_friction, ContactScene, PileContact, PILE_DISK_CELLS,

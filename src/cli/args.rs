@@ -148,12 +148,15 @@ pub struct BenchArgs {
     #[arg(long)]
     pub plain_sweeps: bool,
     /// Also write the table(s) as JSON: the block rows as an array; with a contact scene,
-    /// an object {"block": [...], "contact": [...]}.
+    /// an object {"block": [...], "contact": [...]}; with --probe or --profile, its report.
     #[arg(long)]
     pub json: Option<PathBuf>,
     /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
     #[arg(long)]
     pub adapter: Option<String>,
+    /// The device check's probe and profile.
+    #[command(flatten)]
+    pub device: super::bench::DeviceArgs,
 }
 
 /// The options of `ricochet check`.

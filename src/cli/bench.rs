@@ -3,19 +3,44 @@
 //! the machine's memory refused before anything runs, the order of the runs (both backends of a
 //! contact scene in the same rounds where the GPU can run it), and the tables printed and
 //! written as JSON. The choice of runs and the memory refusal would serve another front end as
-//! well from [`ricochet::bench`].
+//! well from [`ricochet::bench`]. With `--probe` or `--profile` (the device check,
+//! `benches/device.sh`), the GPU's probe or per-stage profile instead of the tables.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 
 use anyhow::Context;
+use clap::Args;
 
-use ricochet::bench::{BenchRow, ContactRow, ContactScene, ContactTiming, PileContact};
+use ricochet::bench::{
+    BenchRow, ContactRow, ContactScene, ContactTiming, PileContact, ProfileReport, ProfileScene,
+};
 use ricochet::gpu::GpuContext;
 use ricochet::scene::Scene;
 
 use super::args::{BenchArgs, BenchBackend, BenchScene};
+
+/// The options of `ricochet bench` for the device check (`benches/device.sh`).
+#[derive(Args)]
+pub struct DeviceArgs {
+    /// Instead of the tables, probe the GPU: the bandwidth of a vec4<f32> copy between two
+    /// buffers and the dispatch floor (dispatches that do nothing, in one pass), each timed
+    /// --rounds times (medians), and the bound that bandwidth puts on the block's throughput.
+    #[arg(long, conflicts_with = "profile")]
+    pub probe: bool,
+    /// MiB of each buffer of the probe's copy (at most the adapter's largest storage binding).
+    #[arg(long, default_value_t = 512, value_name = "MIB")]
+    pub probe_mib: u64,
+    /// Dispatches in the probe's one pass.
+    #[arg(long, default_value_t = ricochet::gpu::probe::DEFAULT_DISPATCHES)]
+    pub probe_dispatches: u32,
+    /// Instead of the tables, profile the GPU: each scene (the block of each --cells, the
+    /// contact scenes of each --elements, with their contact) runs --warmup steps, then --steps
+    /// steps with each part of a step between timestamp queries: device us per step by part.
+    #[arg(long)]
+    pub profile: bool,
+}
 
 /// `ricochet bench`.
 pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
@@ -32,9 +57,17 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         plain_sweeps,
         json,
         adapter,
+        device,
     } = args;
     if rounds == 0 || steps == 0 {
         anyhow::bail!("--steps and --rounds must be positive");
+    }
+    if (device.probe || device.profile) && backend == BenchBackend::Cpu {
+        anyhow::bail!("--probe and --profile time a GPU: not with --backend cpu");
+    }
+    if device.probe {
+        let ctx = GpuContext::new(adapter.as_deref())?;
+        return probe(&ctx, &device, rounds, json.as_deref());
     }
     let all = scene.contains(&BenchScene::All);
     let block = all || scene.contains(&BenchScene::Block);
@@ -67,6 +100,19 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
             let scene = which.scene(which.size_for(target), true, PileContact::All);
             refuse_beyond_memory("--elements", target, scene)?;
         }
+    }
+    if device.profile {
+        let ctx = Arc::new(GpuContext::new(adapter.as_deref())?);
+        let scenes: Vec<(ProfileScene, Vec<usize>)> = block
+            .then(|| (ProfileScene::Block, cells.clone()))
+            .into_iter()
+            .chain(
+                contact_scenes
+                    .iter()
+                    .map(|&c| (ProfileScene::Contact(c), elements.clone())),
+            )
+            .collect();
+        return profile(&ctx, &scenes, warmup, steps, json.as_deref());
     }
     let ctx = match backend {
         BenchBackend::Cpu => None,
@@ -228,4 +274,80 @@ fn contact_rows(
         }
     }
     contact_rows
+}
+
+/// `ricochet bench --probe`: the report printed, and written to `json` when given; an error
+/// when the copy did not copy.
+fn probe(
+    ctx: &GpuContext,
+    device: &DeviceArgs,
+    rounds: u32,
+    json: Option<&Path>,
+) -> anyhow::Result<ExitCode> {
+    let bytes = device
+        .probe_mib
+        .checked_mul(1 << 20)
+        .filter(|b| *b > 0)
+        .context("--probe-mib must be positive and below 2^44")?;
+    let report = ricochet::bench::probe(ctx, bytes, device.probe_dispatches, rounds)?;
+    print!("{}", ricochet::bench::probe_summary(&report));
+    if let Some(path) = json {
+        let text = serde_json::to_string_pretty(&report)?;
+        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    if !report.bandwidth.verified {
+        anyhow::bail!("the probe's copy wrote something else than its source");
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `ricochet bench --profile`: each scene at each size profiled on `ctx` (`scenes`: the scene
+/// and its sizes: the block's cells, the contact scenes' element targets), each row printed to
+/// stderr as it is measured, the table printed and the report written to `json` when given. An
+/// adapter without timestamp queries gives a notice and no rows; a scene that fails is
+/// reported and skipped.
+fn profile(
+    ctx: &Arc<GpuContext>,
+    scenes: &[(ProfileScene, Vec<usize>)],
+    warmup: u64,
+    steps: u64,
+    json: Option<&Path>,
+) -> anyhow::Result<ExitCode> {
+    let mut report = ProfileReport {
+        adapter: ctx.adapter_name(),
+        timestamps: ctx.timestamps,
+        notice: None,
+        rows: Vec::new(),
+    };
+    if ctx.timestamps {
+        for (which, sizes) in scenes {
+            for &n in sizes {
+                let size = match which {
+                    ProfileScene::Block => n,
+                    ProfileScene::Contact(c) => c.size_for(n),
+                };
+                match ricochet::bench::profile(ctx.clone(), *which, size, warmup, steps) {
+                    Ok(Some(row)) => {
+                        eprint!(
+                            "{}",
+                            ricochet::bench::profile_table(std::slice::from_ref(&row))
+                        );
+                        report.rows.push(row);
+                    }
+                    Ok(None) => {}
+                    Err(e) => eprintln!("{} of size {size}: skipped: {e}", which.name()),
+                }
+            }
+        }
+        print!("{}", ricochet::bench::profile_table(&report.rows));
+    } else {
+        let notice = ricochet::bench::no_timestamps(ctx);
+        println!("{notice}");
+        report.notice = Some(notice);
+    }
+    if let Some(path) = json {
+        let text = serde_json::to_string_pretty(&report)?;
+        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(ExitCode::SUCCESS)
 }

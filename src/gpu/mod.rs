@@ -22,6 +22,7 @@ pub mod kernels;
 pub mod layout;
 pub mod loads;
 pub mod node;
+pub mod probe;
 pub mod reduce;
 pub mod shader;
 pub mod solver;
