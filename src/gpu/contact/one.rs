@@ -3,11 +3,24 @@
 //! one dispatch, and the narrow phase, the gather, the one-workgroup Lagrange solve, `finish` and
 //! the reports in one more, where the per-item kernels take eight. The items' arithmetic and the
 //! order of every sum are those of the per-item kernels: the same bits (tested). The search between
-//! the two stays as it is. CPU reference: [`crate::contact::ContactSet::apply`].
+//! the two stays as it is. Its pipelines, the choice of the path, and its dispatches. CPU
+//! reference: [`crate::contact::ContactSet::apply`].
+
+use super::kernels::{module, pipeline, Layouts};
+use super::search::SearchKernels;
+use super::{narrow, report, solve, Dispatch};
+use crate::gpu::kernels::Features;
 
 /// WGSL source (compiled after [`super::narrow::SOURCE`], [`super::solve::SOURCE`] and
 /// [`super::report::SOURCE`]).
 pub const SOURCE: &str = include_str!("../../../shaders/contact_one.wgsl");
+
+/// The one-workgroup stage's shader module: its label and stage files (after
+/// contact_common.wgsl).
+pub const MODULE: (&str, &[&str]) = (
+    "contact_one",
+    &[narrow::SOURCE, solve::SOURCE, report::SOURCE, SOURCE],
+);
 
 /// Contact nodes up to which a CPU adapter runs the contact stage in one workgroup.
 ///
@@ -26,4 +39,37 @@ pub const ONE_NODES: usize = 1 << 12;
 /// workgroup would leave the rest of the device idle).
 pub fn one_path(nodes: usize, device_type: wgpu::DeviceType) -> bool {
     device_type == wgpu::DeviceType::Cpu && nodes <= ONE_NODES
+}
+
+/// The one-workgroup stage's pipelines: `prep_one` (of the search's module) and `contact_one`.
+#[derive(Debug)]
+pub struct OneKernels {
+    prep_one: wgpu::ComputePipeline,
+    contact_one: wgpu::ComputePipeline,
+}
+
+impl OneKernels {
+    /// Compiles the one-workgroup kernels (`prep_one` from the module of `search`).
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        layouts: &Layouts,
+        features: Features,
+        search: &SearchKernels,
+    ) -> Self {
+        let m = module(device, MODULE, features);
+        OneKernels {
+            prep_one: pipeline(device, &search.module, &layouts.with_indirect, "prep_one"),
+            contact_one: pipeline(device, &m, &layouts.main, "contact_one"),
+        }
+    }
+
+    /// Records `prep_one`: the node preparation and the search plan in one workgroup.
+    pub(crate) fn record_prep(&self, d: &Dispatch<'_>, pass: &mut wgpu::ComputePass<'_>) {
+        d.direct(pass, &self.prep_one, 1);
+    }
+
+    /// Records `contact_one`: the stage after the search in one workgroup.
+    pub(crate) fn record(&self, d: &Dispatch<'_>, pass: &mut wgpu::ComputePass<'_>) {
+        d.direct(pass, &self.contact_one, 1);
+    }
 }

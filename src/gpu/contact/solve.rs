@@ -1,11 +1,19 @@
 //! The diagonal-mass Lagrange correction on the device (`shaders/contact_solve.wgsl`): projected
 //! Gauss-Seidel over the colours of the last search and the active-set update, either in one
 //! workgroup (`solve_one`, its re-checks inside it or, with many slots, in `recheck_active`
-//! over many workgroups) or one dispatch per colour and sweep (`sweep_color`, `recheck`). CPU
-//! reference: the sweeps and re-check of [`crate::contact::ContactSet::apply`].
+//! over many workgroups) or one dispatch per colour and sweep (`sweep_color`, `recheck`); the
+//! choice of path by size, the pipelines and their dispatches. CPU reference: the sweeps and
+//! re-check of [`crate::contact::ContactSet::apply`] (`crate::contact::solve`).
+
+use super::kernels::{module, pipeline, Layouts};
+use super::{groups, Dispatch, COLOR_ENTRY, MAX_COLORS, MAX_SWEEP_SLOTS, ROUND_ENTRIES};
+use crate::gpu::kernels::Features;
 
 /// WGSL source (compiled after [`super::narrow::SOURCE`]).
 pub const SOURCE: &str = include_str!("../../../shaders/contact_solve.wgsl");
+
+/// The solve's shader module: its label and stage files (after contact_common.wgsl).
+pub const MODULE: (&str, &[&str]) = ("contact_solve", &[super::narrow::SOURCE, SOURCE]);
 
 /// Sweeps per solve at most on the device (one-workgroup path), as on the CPU.
 pub const MAX_SWEEPS: u32 = crate::contact::MAX_SWEEPS as u32;
@@ -41,3 +49,75 @@ pub const MULTI_SLOTS: usize = 1 << 20;
 /// (about 2 000 slots, 100 sweeps a step) 1 038 -> 1 068 us: below this size the extra
 /// dispatches cost more than the re-checks they spread.
 pub const SPLIT_SLOTS: usize = 1 << 16;
+
+/// Whether the per-colour path is used for `slots` slots on an adapter of `device_type`.
+pub fn multi_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
+    device_type != wgpu::DeviceType::Cpu && slots >= MULTI_SLOTS
+}
+
+/// Whether the one-workgroup solve leaves its re-checks to their own dispatches, for `slots`
+/// slots on an adapter of `device_type` (see [`SPLIT_SLOTS`]).
+pub fn split_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
+    device_type != wgpu::DeviceType::Cpu && slots >= SPLIT_SLOTS
+}
+
+/// The solve's pipelines: the one-workgroup path's and the per-colour path's.
+#[derive(Debug)]
+pub struct SolveKernels {
+    solve_one: wgpu::ComputePipeline,
+    recheck_active: wgpu::ComputePipeline,
+    sweep_color: wgpu::ComputePipeline,
+    recheck: wgpu::ComputePipeline,
+}
+
+impl SolveKernels {
+    /// Compiles the solve kernels.
+    pub(crate) fn new(device: &wgpu::Device, layouts: &Layouts, features: Features) -> Self {
+        let m = module(device, MODULE, features);
+        SolveKernels {
+            solve_one: pipeline(device, &m, &layouts.main, "solve_one"),
+            sweep_color: pipeline(device, &m, &layouts.main, "sweep_color"),
+            recheck: pipeline(device, &m, &layouts.main, "recheck"),
+            recheck_active: pipeline(device, &m, &layouts.main, "recheck_active"),
+        }
+    }
+
+    /// Records the solve on the path of the parameters: in one workgroup (split: each round of
+    /// `solve_one`, index entry r, then its re-check over the active slots), or per colour (the
+    /// sweeps recorded ahead, one dispatch per colour and sweep, index entry (colour, sweep), and
+    /// a re-check after each round's sweeps).
+    pub(crate) fn record(&self, d: &Dispatch<'_>, pass: &mut wgpu::ComputePass<'_>) {
+        let p = d.params;
+        if p.multi == 0 && p.split != 0 {
+            let rounds = crate::contact::ACTIVE_SET_ROUNDS as u64;
+            for r in 0..=rounds {
+                d.bind(pass, r);
+                d.direct(pass, &self.solve_one, 1);
+                if r < rounds {
+                    d.active(pass, &self.recheck_active);
+                }
+            }
+            d.bind(pass, 0);
+        } else if p.multi == 0 {
+            d.direct(pass, &self.solve_one, 1);
+        } else {
+            let rounds = MAX_SWEEP_SLOTS / p.max_sweeps;
+            for r in 0..rounds {
+                pass.set_pipeline(&self.sweep_color);
+                for s in 0..p.max_sweeps {
+                    let q = r * p.max_sweeps + s;
+                    for c in 0..p.colors_recorded {
+                        d.bind(pass, ROUND_ENTRIES + (q * MAX_COLORS + c) as u64);
+                        d.indirect(pass, (COLOR_ENTRY + c) as u64);
+                    }
+                }
+                if r + 1 < rounds {
+                    pass.set_pipeline(&self.recheck);
+                    d.bind(pass, r as u64);
+                    pass.dispatch_workgroups(groups(p.n_slots), 1, 1);
+                }
+            }
+            d.bind(pass, 0);
+        }
+    }
+}
