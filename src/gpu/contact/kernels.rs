@@ -1,7 +1,7 @@
 //! The compiled contact kernels ([`ContactKernels`]: each stage's, built by its file, stateless
 //! and compiled once per device) and what they share: the shader modules' sources
 //! ([`MODULES`], [`stage_source`]) and the layouts of the bind groups every contact kernel binds
-//! ([`Layouts`]). The buffers they bind are the contact state's ([`super::ContactState`]).
+//! (`Layouts`). The buffers they bind are the contact state's ([`super::ContactState`]).
 
 use std::borrow::Cow;
 
@@ -57,6 +57,7 @@ pub(crate) fn pipeline(
     })
 }
 
+/// A read-write storage buffer at `binding` (every contact binding but the index entry).
 pub(super) fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -70,6 +71,7 @@ pub(super) fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+/// A uniform buffer at `binding`, with a dynamic offset when `dynamic`.
 fn uniform_entry(binding: u32, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -82,6 +84,40 @@ fn uniform_entry(binding: u32, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
         count: None,
     }
 }
+
+/// Declares a contact stage's kernels: a struct with one pipeline per entry point of the stage's
+/// module (the `MODULE` of the file that invokes it), each field named for its entry point, all
+/// with group 0 alone ([`Layouts::main`]), and its `new`, which compiles them once per device.
+macro_rules! stage_kernels {
+    ($(#[$doc:meta])* $name:ident: $($entry:ident),+) => {
+        $(#[$doc])*
+        #[derive(Debug)]
+        pub struct $name {
+            $($entry: wgpu::ComputePipeline,)+
+        }
+
+        impl $name {
+            /// Compiles the stage's module and its pipelines.
+            pub(crate) fn new(
+                device: &wgpu::Device,
+                layouts: &$crate::gpu::contact::kernels::Layouts,
+                features: $crate::gpu::kernels::Features,
+            ) -> Self {
+                let m = $crate::gpu::contact::kernels::module(device, MODULE, features);
+                $name {
+                    $($entry: $crate::gpu::contact::kernels::pipeline(
+                        device,
+                        &m,
+                        &layouts.main,
+                        stringify!($entry),
+                    ),)+
+                }
+            }
+        }
+    };
+}
+
+pub(crate) use stage_kernels;
 
 /// The layouts of the contact kernels: group 0, the buffers every contact kernel binds
 /// (`shaders/contact_common.wgsl`'s bindings 1 to 17, the index entry by dynamic offset), and

@@ -20,7 +20,7 @@
 //! counters) and the order of the stages in a step ([`ContactState::record_parts`]). The host
 //! reads back only the contact counters with each batch's control block; a search that needs more
 //! candidate room or more colouring rounds stops the step before it changed anything, and
-//! [`ContactState::grow`] enlarges what is needed and resumes the step. CPU reference:
+//! `ContactState::grow` enlarges what is needed and resumes the step. CPU reference:
 //! [`crate::contact::ContactSet::apply`].
 
 pub mod kernels;

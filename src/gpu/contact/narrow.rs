@@ -5,9 +5,8 @@
 //! constraint records it writes. CPU reference: [`crate::contact::ContactSet::apply`] (its narrow
 //! phase) and [`crate::contact::narrow`].
 
-use super::kernels::{module, pipeline, Layouts};
+use super::kernels::stage_kernels;
 use super::{groups, Dispatch};
-use crate::gpu::kernels::Features;
 
 /// WGSL source (also compiled into the solve module, whose re-check calls it).
 pub const SOURCE: &str = include_str!("../../../shaders/contact_narrow.wgsl");
@@ -19,23 +18,12 @@ pub const MODULE: (&str, &[&str]) = ("contact_narrow", &[SOURCE]);
 /// read by the host: no mirror).
 pub const CONS_SIZE: u64 = 64;
 
-/// The narrow phase's pipelines.
-#[derive(Debug)]
-pub struct NarrowKernels {
-    narrow: wgpu::ComputePipeline,
-    gather: wgpu::ComputePipeline,
+stage_kernels! {
+    /// The narrow phase's pipelines (`narrow`, `gather`).
+    NarrowKernels: narrow, gather
 }
 
 impl NarrowKernels {
-    /// Compiles the narrow-phase kernels.
-    pub(crate) fn new(device: &wgpu::Device, layouts: &Layouts, features: Features) -> Self {
-        let m = module(device, MODULE, features);
-        NarrowKernels {
-            narrow: pipeline(device, &m, &layouts.main, "narrow"),
-            gather: pipeline(device, &m, &layouts.main, "gather"),
-        }
-    }
-
     /// Records the narrow phase over the active slots, then the gather over the contact nodes.
     pub(crate) fn record(&self, d: &Dispatch<'_>, pass: &mut wgpu::ComputePass<'_>) {
         d.active(pass, &self.narrow);

@@ -10,16 +10,17 @@ use super::kernels::{module, pipeline, Layouts};
 use super::search::SearchKernels;
 use super::{narrow, report, solve, Dispatch};
 use crate::gpu::kernels::Features;
+use crate::gpu::reduce::TREE;
 
-/// WGSL source (compiled after [`super::narrow::SOURCE`], [`super::solve::SOURCE`] and
-/// [`super::report::SOURCE`]).
+/// WGSL source (compiled after [`super::narrow::SOURCE`], [`super::solve::SOURCE`], the sum tree
+/// ([`TREE`]) and [`super::report::SOURCE`]).
 pub const SOURCE: &str = include_str!("../../../shaders/contact_one.wgsl");
 
 /// The one-workgroup stage's shader module: its label and stage files (after
 /// contact_common.wgsl).
 pub const MODULE: (&str, &[&str]) = (
     "contact_one",
-    &[narrow::SOURCE, solve::SOURCE, report::SOURCE, SOURCE],
+    &[narrow::SOURCE, solve::SOURCE, TREE, report::SOURCE, SOURCE],
 );
 
 /// Contact nodes up to which a CPU adapter runs the contact stage in one workgroup.

@@ -1,5 +1,5 @@
 //! How a scene's contact stage is solved and dispatched on the device: the choices a caller may
-//! make ([`ContactOptions`]) and the path taken ([`Path`]), decided by adapter and size where not
+//! make ([`ContactOptions`]) and the path taken (`Path`), decided by adapter and size where not
 //! asked for ([`super::solve::multi_path`], [`super::solve::split_path`],
 //! [`super::one::one_path`], [`one_group`]). The CPU reference has one path
 //! ([`crate::contact::ContactSet::apply`]); every device path gives its results within the

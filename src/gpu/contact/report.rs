@@ -4,35 +4,22 @@
 //! CPU reference: the end of [`crate::contact::ContactSet::apply`] and
 //! [`crate::contact::ContactSet::sample`] (`crate::contact::report`).
 
-use super::kernels::{module, pipeline, Layouts};
+use super::kernels::stage_kernels;
 use super::{groups, Dispatch};
-use crate::gpu::kernels::Features;
+use crate::gpu::reduce::TREE;
 
-/// WGSL source.
+/// WGSL source (compiled after [`super::narrow::SOURCE`] and the sum tree, [`TREE`]).
 pub const SOURCE: &str = include_str!("../../../shaders/contact_report.wgsl");
 
 /// The report's shader module: its label and stage files (after contact_common.wgsl).
-pub const MODULE: (&str, &[&str]) = ("contact_report", &[super::narrow::SOURCE, SOURCE]);
+pub const MODULE: (&str, &[&str]) = ("contact_report", &[super::narrow::SOURCE, TREE, SOURCE]);
 
-/// The report's pipelines.
-#[derive(Debug)]
-pub struct ReportKernels {
-    finish: wgpu::ComputePipeline,
-    report_slots: wgpu::ComputePipeline,
-    report_end: wgpu::ComputePipeline,
+stage_kernels! {
+    /// The report's pipelines (`finish`, `report_slots`, `report_end`).
+    ReportKernels: finish, report_slots, report_end
 }
 
 impl ReportKernels {
-    /// Compiles the report kernels.
-    pub(crate) fn new(device: &wgpu::Device, layouts: &Layouts, features: Features) -> Self {
-        let m = module(device, MODULE, features);
-        ReportKernels {
-            finish: pipeline(device, &m, &layouts.main, "finish"),
-            report_slots: pipeline(device, &m, &layouts.main, "report_slots"),
-            report_end: pipeline(device, &m, &layouts.main, "report_end"),
-        }
-    }
-
     /// Records `finish` over the contact nodes, `report_slots` over the active slots and
     /// `report_end` in one workgroup.
     pub(crate) fn record(&self, d: &Dispatch<'_>, pass: &mut wgpu::ComputePass<'_>) {

@@ -5,9 +5,8 @@
 //! choice of path by size, the pipelines and their dispatches. CPU reference: the sweeps and
 //! re-check of [`crate::contact::ContactSet::apply`] (`crate::contact::solve`).
 
-use super::kernels::{module, pipeline, Layouts};
+use super::kernels::stage_kernels;
 use super::{groups, Dispatch, COLOR_ENTRY, MAX_COLORS, MAX_SWEEP_SLOTS, ROUND_ENTRIES};
-use crate::gpu::kernels::Features;
 
 /// WGSL source (compiled after [`super::narrow::SOURCE`]).
 pub const SOURCE: &str = include_str!("../../../shaders/contact_solve.wgsl");
@@ -61,27 +60,13 @@ pub fn split_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
     device_type != wgpu::DeviceType::Cpu && slots >= SPLIT_SLOTS
 }
 
-/// The solve's pipelines: the one-workgroup path's and the per-colour path's.
-#[derive(Debug)]
-pub struct SolveKernels {
-    solve_one: wgpu::ComputePipeline,
-    recheck_active: wgpu::ComputePipeline,
-    sweep_color: wgpu::ComputePipeline,
-    recheck: wgpu::ComputePipeline,
+stage_kernels! {
+    /// The solve's pipelines: the one-workgroup path's (`solve_one`, `recheck_active`) and the
+    /// per-colour path's (`sweep_color`, `recheck`).
+    SolveKernels: solve_one, recheck_active, sweep_color, recheck
 }
 
 impl SolveKernels {
-    /// Compiles the solve kernels.
-    pub(crate) fn new(device: &wgpu::Device, layouts: &Layouts, features: Features) -> Self {
-        let m = module(device, MODULE, features);
-        SolveKernels {
-            solve_one: pipeline(device, &m, &layouts.main, "solve_one"),
-            sweep_color: pipeline(device, &m, &layouts.main, "sweep_color"),
-            recheck: pipeline(device, &m, &layouts.main, "recheck"),
-            recheck_active: pipeline(device, &m, &layouts.main, "recheck_active"),
-        }
-    }
-
     /// Records the solve on the path of the parameters: in one workgroup (split: each round of
     /// `solve_one`, index entry r, then its re-check over the active slots), or per colour (the
     /// sweeps recorded ahead, one dispatch per colour and sweep, index entry (colour, sweep), and

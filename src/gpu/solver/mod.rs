@@ -2,10 +2,10 @@
 //! [`crate::step::cpu::CpuSolver`]): built from a model and its plan (the kernels its features
 //! need, the device state), it records batches of steps per submission and reads back only the
 //! control block and the history rows the GPU wrote, plus the nodal state at snapshot times.
-//! By file: this one builds the solver and submits the batches; [`readback`] reads each batch's
-//! results back and decodes them, [`snapshot`] the nodal state, [`failure`] the messages of a
-//! stopped run, [`profile`] times stages and steps for the bench, [`hooks`] reads the contact
-//! search for tests; checkpoints are in [`super::checkpoint`].
+//! By file: this one builds the solver and submits the batches; `readback.rs` reads each batch's
+//! results back and decodes them, `snapshot.rs` the nodal state, `failure.rs` the messages of a
+//! stopped run, `profile.rs` times stages and steps for the bench, `hooks.rs` reads the contact
+//! search for tests; checkpoints are in `src/gpu/checkpoint.rs`.
 
 mod failure;
 mod hooks;
@@ -432,6 +432,21 @@ impl GpuSolver {
     /// # Errors
     /// [`Error::Gpu`] when the device is lost.
     pub fn run_steps(&mut self, steps: u64) -> Result<u64> {
+        self.take_steps(steps, MAX_BATCH, |solver, n| {
+            solver.submit(n);
+            Ok(())
+        })
+    }
+
+    /// Takes about `steps` steps in submissions of at most `batch` steps, each recorded and
+    /// submitted by `submit` (with its number of steps), its results read back and discarded;
+    /// returns the steps taken: fewer when the run ended or failed.
+    fn take_steps(
+        &mut self,
+        steps: u64,
+        batch: u32,
+        mut submit: impl FnMut(&mut Self, u32) -> Result<()>,
+    ) -> Result<u64> {
         let start = self.ctrl.step as u64;
         let mut events = Vec::new();
         while !self.finished {
@@ -439,8 +454,8 @@ impl GpuSolver {
             if done >= steps {
                 break;
             }
-            let n = (steps - done).min(MAX_BATCH as u64) as u32;
-            self.submit(n);
+            let n = (steps - done).min(batch as u64) as u32;
+            submit(self, n)?;
             self.read(&mut events)?;
             events.clear();
         }

@@ -101,14 +101,7 @@ impl GpuSolver {
         });
         let period = self.ctx.queue.get_timestamp_period() as f64 * 1e-9;
         let mut seconds = vec![0.0; np];
-        let start = self.ctrl.step as u64;
-        let mut events = Vec::new();
-        while !self.finished {
-            let done = (self.ctrl.step as u64).saturating_sub(start);
-            if done >= steps {
-                break;
-            }
-            let n = (steps - done).min(PROFILE_BATCH as u64) as u32;
+        let taken = self.take_steps(steps, PROFILE_BATCH, |solver, n| {
             let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("profile"),
             });
@@ -123,41 +116,40 @@ impl GpuSolver {
                             end_of_pass_write_index: Some(q + 1),
                         }),
                     });
+                    let (state, kernels) = (&solver.state, &solver.kernels);
                     let contact = |mask: u32, pass: &mut wgpu::ComputePass<'_>| {
-                        if let (Some(k), Some(c)) = (&self.kernels.contact, &self.state.contact) {
+                        if let (Some(k), Some(c)) = (&kernels.contact, &state.contact) {
                             c.record_parts(k, pass, mask);
                         }
                     };
                     match p {
-                        0 => self.state.record_forces(&self.kernels, &mut pass),
-                        1 => self.state.record_update(&self.kernels, &mut pass),
+                        0 => state.record_forces(kernels, &mut pass),
+                        1 => state.record_update(kernels, &mut pass),
                         2 => contact(PART_PREP, &mut pass),
                         3 => contact(PART_SEARCH, &mut pass),
                         4 => contact(PART_NARROW, &mut pass),
                         5 => contact(PART_SOLVE, &mut pass),
                         6 => contact(PART_REPORT, &mut pass),
-                        _ => self.state.record_end(&self.kernels, &mut pass),
+                        _ => state.record_end(kernels, &mut pass),
                     }
                 }
             }
             let used = 2 * np as u32 * n;
             enc.resolve_query_set(&queries, 0..used, &resolve, 0);
             enc.copy_buffer_to_buffer(&resolve, 0, &staging, 0, 8 * used as u64);
-            self.finish_submission(enc, n);
-            self.read(&mut events)?;
-            events.clear();
+            solver.finish_submission(enc, n);
             let stamps: Vec<u64> =
-                bytemuck::pod_collect_to_vec(&self.map_prefix(&staging, 8 * used as u64)?);
+                bytemuck::pod_collect_to_vec(&solver.map_prefix(&staging, 8 * used as u64)?);
             // Timing data, not results: kept out of the bytes read back.
-            self.counters.bytes_read_back -= 8 * used as u64;
+            solver.counters.bytes_read_back -= 8 * used as u64;
             for i in 0..n as usize {
                 for (p, t) in seconds.iter_mut().enumerate() {
                     let q = 2 * (i * np + p);
                     *t += stamps[q + 1].saturating_sub(stamps[q]) as f64 * period;
                 }
             }
-        }
-        let taken = (self.ctrl.step as u64).saturating_sub(start);
+            Ok(())
+        })?;
         for t in &mut seconds {
             *t /= taken.max(1) as f64;
         }

@@ -6,19 +6,20 @@
 use super::Buffers;
 use crate::gpu::kernels::Kernels;
 
-/// The bind group of each kernel (group 0).
+/// The bind group of each kernel (group 0), in step order (`None`: a kernel the scene does not
+/// compile).
 #[derive(Debug)]
 pub(super) struct Binds {
-    pub element: wgpu::BindGroup,
-    pub min_dt: wgpu::BindGroup,
-    pub control_dt: wgpu::BindGroup,
-    pub node: wgpu::BindGroup,
-    pub boundary: Option<wgpu::BindGroup>,
-    pub pressure: Option<wgpu::BindGroup>,
-    pub load_work: Option<wgpu::BindGroup>,
-    pub sum: wgpu::BindGroup,
-    pub sum_instances: wgpu::BindGroup,
-    pub control_end: wgpu::BindGroup,
+    pub(super) element: wgpu::BindGroup,
+    pub(super) min_dt: wgpu::BindGroup,
+    pub(super) control_dt: wgpu::BindGroup,
+    pub(super) pressure: Option<wgpu::BindGroup>,
+    pub(super) node: wgpu::BindGroup,
+    pub(super) boundary: Option<wgpu::BindGroup>,
+    pub(super) load_work: Option<wgpu::BindGroup>,
+    pub(super) sum: wgpu::BindGroup,
+    pub(super) sum_instances: wgpu::BindGroup,
+    pub(super) control_end: wgpu::BindGroup,
 }
 
 /// The bind group `label` of `pipeline`'s group 0 (its layout derived from the WGSL): the
@@ -49,7 +50,7 @@ fn bind(
 
 impl Binds {
     /// The bind groups of `kernels` on the buffers `b`.
-    pub fn new(device: &wgpu::Device, kernels: &Kernels, b: &Buffers) -> Binds {
+    pub(super) fn new(device: &wgpu::Device, kernels: &Kernels, b: &Buffers) -> Binds {
         let element = bind(
             device,
             "element",

@@ -1,7 +1,7 @@
 //! Device-resident simulation state: the buffers a scene needs (and no others), allocated once in
 //! a fixed order, and the bind groups built once on them. By file: this one sizes and allocates
-//! the buffers ([`GpuState::new`]); [`alloc`] records them for the plan report and checkpoints,
-//! [`binds`] builds each kernel's bind group, [`record`] records a step as labelled dispatches
+//! the buffers ([`GpuState::new`]); `alloc.rs` records them for the plan report and checkpoints,
+//! `binds.rs` builds each kernel's bind group, `record.rs` records a step as labelled dispatches
 //! ([`GpuState::record_step`]). The contact stage's buffers are
 //! [`super::contact::ContactState`]'s. The CPU reference keeps the same state in host arrays
 //! ([`crate::step::cpu::CpuSolver`]).
@@ -312,28 +312,18 @@ impl GpuState {
         // Two vec4 per element, three with axisymmetric bodies (the hoop bulk stress).
         let es_words = if kernels.features.axisymmetric { 3 } else { 2 };
         let indirect_init = [sum_groups, 1, 1, params.inst_groups, 1, 1];
+        // (Every buffer is copyable both ways, for readbacks and checkpoints: `Alloc` adds the
+        // copy usages.)
         let b = Buffers {
             params: a.init("params", bytemuck::bytes_of(&params), U::UNIFORM),
-            ctrl: a.init(
-                "control",
-                bytemuck::bytes_of(&control),
-                storage | U::COPY_SRC | U::COPY_DST,
-            ),
+            ctrl: a.init("control", bytemuck::bytes_of(&control), storage),
             elements: a.init("elements", bytemuck::cast_slice(&elems), storage),
             bodies: a.init("bodies", bytemuck::cast_slice(&bodies), storage),
-            nodes: a.init(
-                "nodes",
-                bytemuck::cast_slice(&node_state),
-                storage | U::COPY_SRC | U::COPY_DST,
-            ),
+            nodes: a.init("nodes", bytemuck::cast_slice(&node_state), storage),
             inv_mass: a.init("inv_mass", bytemuck::cast_slice(&inv_mass), storage),
             offsets: a.init("adjacency_offsets", bytemuck::cast_slice(&offsets), storage),
             slots: a.init("adjacency_slots", bytemuck::cast_slice(&slots), storage),
-            elem_force: a.zeroed(
-                "element_forces",
-                32 * ne as u64 + 8 * np as u64,
-                storage | U::COPY_SRC,
-            ),
+            elem_force: a.zeroed("element_forces", 32 * ne as u64 + 8 * np as u64, storage),
             pressure: (np > 0).then(|| {
                 a.init(
                     "pressure_entries",
@@ -342,25 +332,18 @@ impl GpuState {
                 )
             }),
             v_old: has_loads.then(|| a.zeroed("v_old", 8 * nn as u64, storage)),
-            elem_dt: a.zeroed("element_dt", 4 * ne as u64, storage | U::COPY_SRC),
+            elem_dt: a.zeroed("element_dt", 4 * ne as u64, storage),
             elem_state: plan
                 .has_dissipation()
                 .then(|| a.zeroed("element_dissipation", 16 * es_words * ne as u64, storage)),
             // J2: C_p^-1 - I and (alpha, plastic work) per element; zero is the virgin state.
-            plastic: plastic.then(|| {
-                a.zeroed(
-                    "element_plastic_state",
-                    32 * ne as u64,
-                    storage | U::COPY_SRC | U::COPY_DST,
-                )
-            }),
+            plastic: plastic.then(|| a.zeroed("element_plastic_state", 32 * ne as u64, storage)),
             // v^{n-1/2} per node, then the f32 rounding residuals of each node's last velocity
             // update and of its last displacement update (node.wgsl's compensated sums, joined by
             // the contact's corrections), carried to the next step (and in the checkpoint like
             // every allocated buffer).
-            v_prev: a.zeroed("v_prev", 24 * nn as u64, storage | U::COPY_SRC),
-            u_snap: has_fields
-                .then(|| a.zeroed("u_snapshot", 8 * nn as u64, storage | U::COPY_SRC)),
+            v_prev: a.zeroed("v_prev", 24 * nn as u64, storage),
+            u_snap: has_fields.then(|| a.zeroed("u_snapshot", 8 * nn as u64, storage)),
             // Load curves: only for scenes with velocity boundaries or pressure loads (their
             // kernels declare the table), at least one entry.
             curves: (nc > 0 || np > 0).then(|| {
@@ -400,11 +383,7 @@ impl GpuState {
                 if fused { 0 } else { 16 * first as u64 },
                 storage,
             ),
-            history: a.zeroed(
-                "history",
-                4 * (row_cap as u64 * row_stride as u64),
-                storage | U::COPY_SRC,
-            ),
+            history: a.zeroed("history", 4 * (row_cap as u64 * row_stride as u64), storage),
             times: a.init("times", bytemuck::cast_slice(&times), storage),
             inst_res: a.zeroed("instance_sums", 16 * instances.len() as u64, storage),
             indirect: a.init(

@@ -19,6 +19,18 @@ fn dispatch(
     pass.dispatch_workgroups(groups, 1, 1);
 }
 
+/// [`dispatch`] of a kernel the scene may not have (`None`: it has not, nor its bind group).
+fn dispatch_if(
+    pass: &mut wgpu::ComputePass<'_>,
+    pipeline: &Option<wgpu::ComputePipeline>,
+    bind: &Option<wgpu::BindGroup>,
+    groups: u32,
+) {
+    if let (Some(p), Some(b)) = (pipeline, bind) {
+        dispatch(pass, p, b, groups);
+    }
+}
+
 impl GpuState {
     /// Records one step into `pass`: element, stable step, node update, boundaries, samples, control.
     pub fn record_step(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
@@ -35,14 +47,10 @@ impl GpuState {
 
     /// Records the uncoupled update of a step: pressure loads, the node update, boundaries.
     pub fn record_update(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
-        let b = &self.bind;
-        if let (Some(p), Some(bg)) = (&kernels.pressure, &b.pressure) {
-            dispatch(pass, p, bg, self.groups.pressure);
-        }
+        let (b, g) = (&self.bind, &self.groups);
+        dispatch_if(pass, &kernels.pressure, &b.pressure, g.pressure);
         self.record_node(kernels, pass);
-        if let (Some(p), Some(bg)) = (&kernels.boundary, &b.boundary) {
-            dispatch(pass, p, bg, self.groups.boundary);
-        }
+        dispatch_if(pass, &kernels.boundary, &b.boundary, g.boundary);
     }
 
     /// Records the end of a step from the contact stage on: contact, load work, sample sums, control.
@@ -57,9 +65,7 @@ impl GpuState {
     /// Records the last part of a step: load work, sample sums, the history row and control.
     pub fn record_end(&self, kernels: &Kernels, pass: &mut wgpu::ComputePass<'_>) {
         let b = &self.bind;
-        if let (Some(p), Some(bg)) = (&kernels.load_work, &b.load_work) {
-            dispatch(pass, p, bg, self.groups.node);
-        }
+        dispatch_if(pass, &kernels.load_work, &b.load_work, self.groups.node);
         if self.params.sum_groups > 0 {
             pass.set_pipeline(&kernels.sum);
             pass.set_bind_group(0, &b.sum, &[]);
