@@ -1,6 +1,6 @@
 //! Gmsh meshes: the elements of one physical surface of an MSH 4.1 file (ASCII or binary), read
 //! with the `mshio` crate, as a body's nodes and counter-clockwise quads and triangles (a
-//! triangle as the collapsed quad `[a, b, c, c]`, see [`crate::step::element`]). `mshio` reads the
+//! triangle as the collapsed quad `[a, b, c, c]`, see [`crate::element`]). `mshio` reads the
 //! entities, nodes and elements; the names of the physical groups (`$PhysicalNames`) are read
 //! here. Every problem is reported as a sentence naming the group and, for an element, its Gmsh
 //! tag and nodes; the scene parser puts it in an [`crate::Error::Invalid`] with the scene file,
@@ -262,7 +262,7 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
                             n.len()
                         ));
                     }
-                    // A triangle is a collapsed quad [a, b, c, c] (see ricochet::step::element).
+                    // A triangle is a collapsed quad [a, b, c, c] (see ricochet::element).
                     raw.push((e.element_tag, [n[0], n[1], n[2], n[corners - 1]]));
                 }
             } else {
@@ -416,19 +416,20 @@ fn node_groups(
     };
     let mut out = Vec::new();
     for n in names.iter().filter(|n| n.dim == 0 || n.dim == 1) {
+        // The points or curves of the physical group.
+        let member =
+            |tag: i32, physical: &[i32]| physical.iter().any(|&p| p.abs() == n.tag).then_some(tag);
         let tags: HashSet<i32> = if n.dim == 0 {
             entities
                 .points
                 .iter()
-                .filter(|e| e.physical_tags.iter().any(|&p| p.abs() == n.tag))
-                .map(|e| e.tag)
+                .filter_map(|e| member(e.tag, &e.physical_tags))
                 .collect()
         } else {
             entities
                 .curves
                 .iter()
-                .filter(|e| e.physical_tags.iter().any(|&p| p.abs() == n.tag))
-                .map(|e| e.tag)
+                .filter_map(|e| member(e.tag, &e.physical_tags))
                 .collect()
         };
         let mut nodes = BTreeSet::new();

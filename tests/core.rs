@@ -41,7 +41,15 @@
 //!   GIF frames, the colour of the patch test's uniform stress, refused folders and fields;
 //! - [`restart`]: checkpoints and `run --restart` give the outputs of the run never stopped, bit
 //!   for bit, after a crash and after an interruption, with contact; bad checkpoints exit 2;
-//! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound.
+//! - [`run_library`]: the run as a library call (`run::execute`): progress reported, an interrupt
+//!   flag giving an `interrupted` outcome and summary, and a restart through the same call;
+//! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound;
+//! - [`layout`]: the library's modules depend on each other one way (no circle between the
+//!   top-level modules, nor inside `step`, `contact` and `gpu`).
+
+#[macro_use]
+#[path = "shared/scene_text.rs"]
+mod scene_text;
 
 #[path = "core/common.rs"]
 mod common;
@@ -68,6 +76,8 @@ mod gmsh;
 mod gravity;
 #[path = "core/hourglass.rs"]
 mod hourglass;
+#[path = "core/layout.rs"]
+mod layout;
 #[path = "core/load_curve.rs"]
 mod load_curve;
 #[path = "core/mass.rs"]
@@ -90,6 +100,8 @@ mod plot;
 mod restart;
 #[path = "core/rigid.rs"]
 mod rigid;
+#[path = "core/run_library.rs"]
+mod run_library;
 #[path = "core/stress.rs"]
 mod stress;
 #[path = "core/verify_cases.rs"]

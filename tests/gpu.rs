@@ -5,9 +5,15 @@
 //! fail instead, so a CI machine without lavapipe cannot pass silently.
 #![allow(clippy::needless_range_loop)]
 
+#[macro_use]
+#[path = "shared/scene_text.rs"]
+mod scene_text;
+
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
+use ricochet::element::plastic::PlasticState;
+use ricochet::element::{evaluate_state, Dissipation};
 use ricochet::gpu::kernels::Kernels;
 use ricochet::gpu::shader::{self, Features};
 use ricochet::gpu::{GpuContext, GpuSolver};
@@ -16,8 +22,6 @@ use ricochet::plan::Plan;
 use ricochet::run::{run, schedule};
 use ricochet::scene::Scene;
 use ricochet::step::cpu::CpuSolver;
-use ricochet::step::element::{evaluate_state, Dissipation};
-use ricochet::step::plastic::PlasticState;
 use ricochet::step::Solver;
 
 /// One GPU test at a time: lavapipe shares the machine's two cores.
@@ -41,6 +45,24 @@ fn load(text: &str, name: &str) -> (Scene, Model, Plan) {
     let model = ricochet::run::model(&scene).expect("model builds");
     let plan = Plan::new(&scene, &model);
     (scene, model, plan)
+}
+
+/// The largest difference of a force component of an element's corners between the GPU
+/// (`gpu`) and the CPU reference (`cpu`), relative to the largest CPU component (at least
+/// 1e-30).
+fn force_difference(gpu: &[[f64; 2]; 4], cpu: &[[f64; 2]; 4]) -> f64 {
+    let scale = cpu
+        .iter()
+        .map(|f| f[0].abs().max(f[1].abs()))
+        .fold(0.0f64, f64::max)
+        .max(1e-30);
+    let mut worst: f64 = 0.0;
+    for a in 0..4 {
+        for c in 0..2 {
+            worst = worst.max((gpu[a][c] - cpu[a][c]).abs() / scale);
+        }
+    }
+    worst
 }
 
 fn asset(name: &str) -> String {
@@ -242,18 +264,7 @@ fn element_kernel_matches_cpu_reference_on_random_states() {
                 &plastic[e],
             );
             plastic[e] = cpu.plastic;
-            let scale = cpu
-                .force
-                .iter()
-                .map(|f| f[0].abs().max(f[1].abs()))
-                .fold(0.0f64, f64::max)
-                .max(1e-30);
-            for a in 0..4 {
-                for c in 0..2 {
-                    let d = (forces[e][a][c] - cpu.force[a][c]).abs() / scale;
-                    worst = worst.max(d);
-                }
-            }
+            worst = worst.max(force_difference(&forces[e], &cpu.force));
             let ddt = (dts[e] - cpu.dt).abs() / cpu.dt;
             assert!(ddt < 1e-5, "element {e}: dt {} vs {}", dts[e], cpu.dt);
         }
@@ -309,7 +320,7 @@ fn element_kernel_passes_the_patch_test_on_the_mixed_gmsh_mesh() {
         let tris = model
             .quads
             .iter()
-            .filter(|q| ricochet::step::element::is_triangle(q))
+            .filter(|q| ricochet::geometry::is_triangle(q))
             .count();
         assert_eq!((model.element_count(), tris), (55, 35));
         let mut gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
@@ -451,17 +462,7 @@ fn element_kernel_matches_cpu_reference_on_triangles() {
                     0.0,
                     &PlasticState::VIRGIN,
                 );
-                let scale = cpu
-                    .force
-                    .iter()
-                    .map(|f| f[0].abs().max(f[1].abs()))
-                    .fold(0.0f64, f64::max)
-                    .max(1e-30);
-                for a in 0..4 {
-                    for c in 0..2 {
-                        worst = worst.max((forces[e][a][c] - cpu.force[a][c]).abs() / scale);
-                    }
-                }
+                worst = worst.max(force_difference(&forces[e], &cpu.force));
                 assert!(
                     ((dts[e] - cpu.dt) / cpu.dt).abs() < 1e-5,
                     "{formulation}, element {e}: dt {} vs {}",
@@ -678,18 +679,6 @@ fn parity_with_the_multi_level_reductions() {
     );
 }
 
-#[path = "shared/load_curve_scene.rs"]
-mod load_curve_scene;
-
-#[path = "shared/gravity_scene.rs"]
-mod gravity_scene;
-
-#[path = "shared/friction_scenes.rs"]
-mod friction_scenes;
-
-#[path = "shared/traction.rs"]
-mod traction;
-
 /// Coulomb friction on the device (the tangential update in the Lagrange sweeps, its work and
 /// force in the reports): the block sliding on a rigid floor and on a clamped block
 /// (node-to-segment, both passes), as on the CPU. The floor nodes chatter under the suddenly
@@ -729,16 +718,7 @@ fn friction_as_on_the_cpu_and_the_same_bits_twice() {
             .map(f64::to_bits)
             .collect()
     };
-    for (name, text) in [
-        ("floor", block_on_floor(1.0e-3, "lagrange")),
-        ("block", block_on_block(1.0e-3, "lagrange")),
-        ("floor, penalty", block_on_floor(1.0e-3, "penalty")),
-        ("block, penalty", block_on_block(1.0e-3, "penalty")),
-        (
-            "floor, penalty, softer tangent",
-            block_on_floor(1.0e-3, "penalty") + "friction_stiffness = 0.25\n",
-        ),
-    ] {
+    for (name, text) in sliding_cases(1.0e-3) {
         let (sc, sg, _, _, _, _) = both(ctx.clone(), &text, name, None);
         let (_, sg2, _, _, _, _) = both(ctx.clone(), &text, name, None);
         assert_eq!(sc.len(), sg.len(), "{name}: rows");
@@ -1110,6 +1090,15 @@ fn pressure_and_damping_compile_their_kernels_only_when_used() {
         assert_eq!(names.contains(&"v_old"), pressure || damping, "{names:?}");
     }
 }
+
+#[path = "shared/friction_scenes.rs"]
+mod friction_scenes;
+#[path = "shared/gravity_scene.rs"]
+mod gravity_scene;
+#[path = "shared/load_curve_scene.rs"]
+mod load_curve_scene;
+#[path = "shared/traction.rs"]
+mod traction;
 
 #[path = "gpu/contact.rs"]
 mod contact;

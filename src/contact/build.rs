@@ -4,8 +4,9 @@
 use std::collections::BTreeMap;
 
 use super::report::Interface;
-use super::surface::{self, Surface};
-use super::{ContactSet, Pass, Wall};
+use super::{ContactSet, Law, Pass, Wall};
+use crate::geometry::quad_geometry;
+use crate::model::surface::{self, Surface};
 use crate::model::Model;
 use crate::scene::{Contact, PenaltyForm};
 
@@ -23,7 +24,7 @@ fn bulk_modulus(model: &Model, body: usize) -> f64 {
 }
 
 fn element_area(model: &Model, e: u32) -> f64 {
-    crate::step::element::quad_geometry(&model.corners[e as usize]).area
+    quad_geometry(&model.corners[e as usize]).area
 }
 
 /// Surfaces and local node numbering while the set is built.
@@ -153,10 +154,12 @@ impl Builder<'_> {
             segments: Vec::new(),
             segment_body: Vec::new(),
             stiffness: Vec::new(),
-            friction: c.friction,
-            friction_stiffness: c.friction_stiffness,
-            mass_form: c.penalty_form == PenaltyForm::Mass,
-            augmentation: c.augmentation_rate,
+            law: Law::new(
+                c.friction,
+                c.friction_stiffness,
+                c.penalty_form,
+                c.augmentation_rate,
+            ),
             candidates: Vec::new(),
         };
         let spring = Spring {
@@ -247,10 +250,24 @@ impl Builder<'_> {
             body,
             neighbours,
             stiffness,
-            friction: w.friction,
-            friction_stiffness: w.friction_stiffness,
-            mass_form: w.penalty_form == PenaltyForm::Mass,
-            augmentation: w.augmentation_rate,
+            law: Law::new(
+                w.friction,
+                w.friction_stiffness,
+                w.penalty_form,
+                w.augmentation_rate,
+            ),
+        }
+    }
+}
+
+impl Law {
+    /// The law of a contact's or wall's keys.
+    fn new(friction: f64, friction_stiffness: f64, form: PenaltyForm, augmentation: f64) -> Self {
+        Self {
+            friction,
+            friction_stiffness,
+            mass_form: form == PenaltyForm::Mass,
+            augmentation,
         }
     }
 }

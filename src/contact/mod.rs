@@ -2,10 +2,10 @@
 //! rigid walls, enforced after the uncoupled update of all bodies (the CONTACT step of the
 //! explicit flowchart, Belytschko X.6).
 //!
-//! One [`ContactSet`] holds every contact of a model; [`ContactSet::apply`] (here) runs the
-//! stages of a step in order, each in its own file:
+//! One [`ContactSet`] holds every contact of a model, built on the bodies' boundary edges and
+//! nodes ([`crate::model::surface`]); [`ContactSet::apply`] (here) runs the stages of a step in
+//! order, each in its own file:
 //!
-//! - [`surface`]: boundary edges of each body with outward normals, and boundary nodes.
 //! - [`search`] (with the `parry2d` BVH in [`broad`]): candidate (slave node, master segment)
 //!   pairs, inflated by a search margin and swept over the step; searched again only when some
 //!   contact node has moved more than half the margin since the last search.
@@ -34,13 +34,11 @@ pub mod overlap;
 pub mod report;
 pub mod search;
 pub mod solve;
-pub mod surface;
 pub mod tables;
 
 use crate::model::Model;
 use crate::scene::ContactMethod;
 
-pub use overlap::Overlap;
 pub use report::ContactSample;
 pub use solve::{
     extrapolation, penalty_impulse, SweepStats, ACTIVE_SET_ROUNDS, EXTRAPOLATION, MAX_SWEEPS,
@@ -81,18 +79,8 @@ struct Pass {
     segment_body: Vec<u32>,
     /// Penalty stiffness of each segment.
     stiffness: Vec<f64>,
-    /// Coulomb friction coefficient of the interface.
-    #[serde(default)]
-    friction: f64,
-    /// Penalty friction: the tangential spring over the normal one.
-    #[serde(default = "one")]
-    friction_stiffness: f64,
-    /// Penalty in the mass form (k = s m* / dt^2): outside the stable step.
-    #[serde(default)]
-    mass_form: bool,
-    /// Augmented Lagrangian: the multipliers' update rate (1/s; 0 for the other methods).
-    #[serde(default)]
-    augmentation: f64,
+    /// The interface's contact law.
+    law: Law,
     /// Admissible candidate (position in `slaves`, segment) pairs from the last search, sorted.
     candidates: Vec<(u32, u32)>,
 }
@@ -157,6 +145,14 @@ struct Wall {
     neighbours: Vec<[u32; 2]>,
     /// Penalty stiffness of each node.
     stiffness: Vec<f64>,
+    /// The wall's contact law.
+    law: Law,
+}
+
+/// The contact law of an interface (a `[[contact]]` table's passes, or a wall) besides its method
+/// and penalty stiffness: friction, and the penalty's form and augmentation.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+struct Law {
     /// Coulomb friction coefficient.
     #[serde(default)]
     friction: f64,

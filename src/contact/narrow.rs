@@ -5,7 +5,7 @@
 //! kernel, which implements the same rules.
 
 use super::solve::{augmented_impulse, consistent_penetration, penalty_impulse};
-use super::{dot, sub, Constraint, ContactSet, Pass};
+use super::{dot, sub, Constraint, ContactSet, Law, Pass};
 use crate::scene::ContactMethod;
 
 /// Whether master segment a->b (body `seg_body`) may be paired with slave node s (body
@@ -333,10 +333,8 @@ impl ContactSet {
                     wt: 0.0,
                     lt: 0.0,
                 };
-                if p.friction > 0.0 && p.method == ContactMethod::Lagrange {
-                    // (No friction where no node can move along the tangent.)
-                    c.wt = self.weight(s, Some((a, b)), pr.xi, c.tangent(), 1.0);
-                    c.mu = if c.wt > 0.0 { p.friction } else { 0.0 };
+                if p.law.friction > 0.0 && p.method == ContactMethod::Lagrange {
+                    self.lagrange_friction(&mut c, p.law.friction);
                 }
                 if p.method.has_springs() {
                     let rate = self.free_relative(s, Some((a, b)), pr.xi, pr.normal);
@@ -345,27 +343,59 @@ impl ContactSet {
                     } else {
                         pr.gap
                     };
-                    let (k, r) = (p.stiffness[j], p.augmentation);
-                    let Some((lambda, bounded)) = spring_impulse(
-                        [k, g, rate, g + dt * rate, carried, w, dt, dt_n, r],
-                        [c.interface, c.s],
+                    let Some(bounded) = self.spring(
+                        &mut c,
+                        &p.law,
+                        [p.stiffness[j], g, rate, g + dt * rate, carried, pr.gap],
+                        dt,
+                        dt_n,
                         &mut springs,
                     ) else {
                         continue;
                     };
-                    c.lambda = lambda;
                     self.penalty_bounded += u64::from(bounded);
-                    c.penetration = (-pr.gap).max(0.0);
-                    c.w = -w;
-                    if p.friction > 0.0 {
-                        let k = p.friction_stiffness * p.stiffness[j];
-                        self.penalty_friction(&mut c, k, p.friction, dt, dt_n, &mut springs);
-                    }
                 }
                 self.cons.push(c);
             }
         }
         self.pen_ft_next = springs;
+    }
+
+    /// A Lagrange constraint's Coulomb friction `mu`: its tangential weight, and no friction
+    /// where no node can move along the tangent.
+    fn lagrange_friction(&self, c: &mut Constraint, mu: f64) {
+        let ab = (c.a != u32::MAX).then_some((c.a, c.b));
+        c.wt = self.weight(c.s, ab, c.xi, c.tangent(), 1.0);
+        c.mu = if c.wt > 0.0 { mu } else { 0.0 };
+    }
+
+    /// Makes `c` (of weight `c.w`) a spring method's constraint under the law `law`, from
+    /// `[k, g, rate, g_trial, carried, gap]`: its impulse over the step ([`spring_impulse`] with
+    /// the normal stiffness k, the gap g it acts on (the perturbed Lagrangian's consistent one),
+    /// its rate, the trial gap and the multiplier carried from the last step), the penetration
+    /// it reports from the node's own gap `gap`, and with friction its tangential spring
+    /// ([`Self::penalty_friction`]). `None` where the node has left the contact, else whether
+    /// the penalty's bound acted.
+    fn spring(
+        &self,
+        c: &mut Constraint,
+        law: &Law,
+        [k, g, rate, g_trial, carried, gap]: [f64; 6],
+        dt: f64,
+        dt_n: f64,
+        springs: &mut Vec<([u32; 2], f64)>,
+    ) -> Option<bool> {
+        let (w, r) = (c.w, law.augmentation);
+        let impulse = [k, g, rate, g_trial, carried, w, dt, dt_n, r];
+        let (lambda, bounded) = spring_impulse(impulse, [c.interface, c.s], springs)?;
+        c.lambda = lambda;
+        c.penetration = (-gap).max(0.0);
+        c.w = -w;
+        if law.friction > 0.0 {
+            let kt = law.friction_stiffness * k;
+            self.penalty_friction(c, kt, law.friction, dt, dt_n, springs);
+        }
+        Some(bounded)
     }
 
     /// Penalty friction (the Curnier-Mroz regularization of Coulomb's law): a tangential spring
@@ -513,9 +543,8 @@ impl ContactSet {
                     wt: 0.0,
                     lt: 0.0,
                 };
-                if w.friction > 0.0 && w.method == ContactMethod::Lagrange {
-                    c.wt = self.weight(l, None, 0.0, c.tangent(), 1.0);
-                    c.mu = if c.wt > 0.0 { w.friction } else { 0.0 };
+                if w.law.friction > 0.0 && w.method == ContactMethod::Lagrange {
+                    self.lagrange_friction(&mut c, w.law.friction);
                 }
                 match w.method {
                     ContactMethod::Lagrange => {
@@ -542,22 +571,17 @@ impl ContactSet {
                         } else {
                             (g, g_tr)
                         };
-                        let (k, r) = (w.stiffness[idx], w.augmentation);
-                        let Some((lambda, bounded)) = spring_impulse(
-                            [k, gs, rate, gs_tr, carried, weight, dt, dt_n, r],
-                            [c.interface, c.s],
+                        let Some(bounded) = self.spring(
+                            &mut c,
+                            &w.law,
+                            [w.stiffness[idx], gs, rate, gs_tr, carried, g],
+                            dt,
+                            dt_n,
                             &mut springs,
                         ) else {
                             continue;
                         };
-                        c.lambda = lambda;
                         self.penalty_bounded += u64::from(bounded);
-                        c.penetration = (-g).max(0.0);
-                        c.w = -weight;
-                        if w.friction > 0.0 {
-                            let (k, mu) = (w.friction_stiffness * w.stiffness[idx], w.friction);
-                            self.penalty_friction(&mut c, k, mu, dt, dt_n, &mut springs);
-                        }
                     }
                 }
                 self.cons.push(c);

@@ -3,29 +3,12 @@
 //! overlaps deeper than half a contact segment are refused.
 
 use super::narrow::project;
-use super::surface::Surface;
 use super::{broad, ContactSet};
 use crate::error::Result;
-use crate::model::Model;
+use crate::geometry::{element_centre, min_corner_ratio, quad_geometry};
+use crate::model::surface::Surface;
+use crate::model::{Model, Overlap};
 use crate::scene::{self, Scene};
-use crate::step::element::{min_corner_ratio, quad_geometry};
-
-/// A slave node behind a master surface or a wall at t = 0.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Overlap {
-    /// Contact or wall name.
-    pub interface: String,
-    /// Global node index.
-    pub node: u32,
-    /// Penetration depth (m).
-    pub depth: f64,
-    /// Unit normal of the surface it is behind (moving the node by `depth` along it removes it).
-    pub normal: [f64; 2],
-    /// The contact pass that found it (`None` for a wall).
-    pub pass: Option<usize>,
-    /// The bodies of the node and of the surface it is behind (`None` for a wall).
-    pub bodies: Option<[u32; 2]>,
-}
 
 impl ContactSet {
     /// Whether pass `p` is a group's.
@@ -171,7 +154,7 @@ fn remove(model: &mut Model, scene: &Scene) -> Result<bool> {
                     "moving the nodes that overlap a contact surface at t = 0 onto it inverts this element: separate the bodies",
                 ));
             }
-            let [cx, cy] = crate::step::element::element_centre(&x);
+            let [cx, cy] = element_centre(&x);
             model.corners[e] = x.map(|p| [p[0] - cx, p[1] - cy]);
         }
         model.initial_overlaps.extend(found);

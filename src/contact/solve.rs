@@ -93,7 +93,7 @@ impl ContactSet {
         for p in self
             .passes
             .iter()
-            .filter(|p| p.method.has_springs() && !p.mass_form)
+            .filter(|p| p.method.has_springs() && !p.law.mass_form)
         {
             let ms = p
                 .slaves
@@ -111,7 +111,7 @@ impl ContactSet {
             // springs act on it.
             let passes = if p.two_pass { 2.0 } else { 1.0 };
             let k = passes
-                * tangential(p.friction, p.friction_stiffness)
+                * tangential(p.law.friction, p.law.friction_stiffness)
                 * p.stiffness.iter().copied().fold(0.0f64, f64::max);
             consider(
                 k * (1.0 / ms + 1.0 / mm),
@@ -121,9 +121,9 @@ impl ContactSet {
         for w in self
             .walls
             .iter()
-            .filter(|w| w.method.has_springs() && !w.mass_form)
+            .filter(|w| w.method.has_springs() && !w.law.mass_form)
         {
-            let kt = tangential(w.friction, w.friction_stiffness);
+            let kt = tangential(w.law.friction, w.law.friction_stiffness);
             let omega2 = kt
                 * w.nodes
                     .iter()

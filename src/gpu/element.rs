@@ -1,11 +1,11 @@
 //! Element stage kernel (`shaders/element.wgsl`): stress, hourglass and bulk-viscosity forces per
 //! element, the element stable step, and on sample steps the element energies; the mirrors of its
 //! `Body` and `Element` and their tables from the model. The CPU reference is
-//! [`crate::step::element::evaluate`]; `tests/gpu.rs` compares the two on random inputs.
+//! [`crate::element::evaluate`]; `tests/gpu.rs` compares the two on random inputs.
 
 use bytemuck::{Pod, Zeroable};
 
-use super::kernels::{compute_pipeline, Features};
+use super::shader::{compute_pipeline, Features};
 use crate::model::Model;
 use crate::scene::{Formulation, HourglassForm, MaterialModel};
 

@@ -1,10 +1,8 @@
 //! The compiled kernels of a scene (stateless; built once from the device and the plan's
 //! features), kept apart from the simulation buffers in [`super::state::GpuState`].
 
-use std::borrow::Cow;
-
 pub use super::shader::Features;
-use super::{boundary, contact, control, element, loads, node, reduce, shader};
+use super::{boundary, contact, control, element, loads, node, reduce};
 
 /// Compute pipelines for one combination of features.
 #[derive(Debug)]
@@ -87,32 +85,4 @@ impl Kernels {
         ]);
         v
     }
-}
-
-pub(crate) fn compute_pipeline(
-    device: &wgpu::Device,
-    label: &str,
-    kernel: &str,
-    features: Features,
-    entry: &str,
-    workgroup: Option<u32>,
-) -> wgpu::ComputePipeline {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(Cow::Owned(shader::source(kernel, features))),
-    });
-    let constants: Vec<(&str, f64)> = workgroup
-        .map(|w| vec![("WG", w as f64)])
-        .unwrap_or_default();
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(label),
-        layout: None,
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: wgpu::PipelineCompilationOptions {
-            constants: &constants,
-            ..Default::default()
-        },
-        cache: None,
-    })
 }

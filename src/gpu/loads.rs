@@ -7,7 +7,7 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::{ComputePipeline, Device};
 
-use super::kernels::{compute_pipeline, Features};
+use super::shader::{compute_pipeline, Features};
 use crate::model::Model;
 
 /// WGSL source.

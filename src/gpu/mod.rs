@@ -8,6 +8,7 @@
 //! [`state::GpuState`] the buffers, [`solver::GpuSolver`] drives them in batches of steps.
 //! All sums are gathers or fixed-order trees: the same scene on the same adapter gives the same bits.
 
+mod alloc;
 pub mod boundary;
 mod checkpoint;
 pub mod contact;

@@ -2,7 +2,7 @@
 //! order (deterministic, no atomics) and performs the central-difference update. The CPU reference
 //! is the node stage of [`crate::step::cpu::CpuSolver`].
 
-use super::kernels::{compute_pipeline, Features};
+use super::shader::{compute_pipeline, Features};
 
 /// WGSL source.
 pub const SOURCE: &str = include_str!("../../shaders/node.wgsl");

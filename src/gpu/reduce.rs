@@ -8,7 +8,7 @@
 
 use wgpu::{ComputePipeline, Device};
 
-use super::kernels::{compute_pipeline, Features};
+use super::shader::{compute_pipeline, Features};
 
 /// WGSL source (the sum tree and the parts shared with [`super::control`] first).
 pub const SOURCE: &str = concat!(

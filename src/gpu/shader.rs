@@ -1,6 +1,8 @@
 //! WGSL sources: each kernel's file with `shaders/common.wgsl` prepended, and `//#if NAME` ...
 //! `//#else` / `//#endif` blocks kept only for the features a scene needs (so a scene without, say, velocity
-//! boundaries compiles no binding for them).
+//! boundaries compiles no binding for them); [`compute_pipeline`] compiles one into a pipeline.
+
+use std::borrow::Cow;
 
 use crate::error::{Error, Result};
 
@@ -165,6 +167,36 @@ pub fn source(kernel: &str, features: Features) -> String {
         }
     }
     out
+}
+
+/// The compute pipeline of entry point `entry` of kernel source `kernel` (labelled `label`) with
+/// the features `features` compiled in and, when given, the workgroup size `WG`.
+pub(crate) fn compute_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    kernel: &str,
+    features: Features,
+    entry: &str,
+    workgroup: Option<u32>,
+) -> wgpu::ComputePipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(Cow::Owned(source(kernel, features))),
+    });
+    let constants: Vec<(&str, f64)> = workgroup
+        .map(|w| vec![("WG", w as f64)])
+        .unwrap_or_default();
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: None,
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
 }
 
 /// Parses and validates WGSL with naga (no GPU needed).

@@ -14,11 +14,11 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use crate::element::plastic::{j2_elastic, PlasticState};
 use crate::error::Result;
+use crate::geometry::is_triangle;
 use crate::model::Model;
 use crate::scene::{FieldFormat, Formulation, MaterialModel};
-use crate::step::element::{evaluate_state, Dissipation};
-use crate::step::plastic::{j2_elastic, PlasticState};
 use crate::step::Snapshot;
 
 use super::{create_dir, write_file, write_pieces};
@@ -53,18 +53,7 @@ pub fn element_fields_state(
     plastic: &PlasticState,
 ) -> ElementFields {
     let p = model.params(e);
-    let q = model.quads[e];
-    let ue = q.map(|i| u[i as usize]);
-    let out = evaluate_state(
-        p,
-        &model.geometry(e),
-        &model.corners[e],
-        &ue,
-        &[[0.0; 2]; 4],
-        &Dissipation::default(),
-        0.0,
-        plastic,
-    );
+    let out = model.element_at(e, u, plastic);
     // A J2 element at the state the solver reached at u: its elastic response (evaluating it as
     // a step would return again, without the rate of the step that got there).
     let (stress, plastic_strain) = if p.model == MaterialModel::J2Plastic {
@@ -411,7 +400,7 @@ fn arrays(model: &Model, snap: &Snapshot, body: &crate::model::BodyModel) -> [Ve
     }];
     // Quads as VTK_QUAD (9); triangles, the collapsed quads [a, b, c, c], as VTK_TRIANGLE (5)
     // with their three nodes.
-    let tri = |e: usize| crate::step::element::is_triangle(&model.quads[e]);
+    let tri = |e: usize| is_triangle(&model.quads[e]);
     let mut offsets = Vec::with_capacity(elems.len());
     let mut end = 0i32;
     for e in elems.clone() {

@@ -1,12 +1,13 @@
 //! The CPU reference solver (f64, one thread). Every GPU kernel is tested against this path.
 
 use crate::contact::ContactSet;
+use crate::element::plastic::PlasticState;
+use crate::element::{evaluate_state, Dissipation, ElementOut};
 use crate::error::Result;
+use crate::geometry::QuadGeometry;
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
 
-use super::element::{evaluate_state, Dissipation, QuadGeometry};
-use super::plastic::PlasticState;
 use super::{Clock, Event, Failure, Sample, Schedule, Snapshot, Solver};
 
 /// Explicit central-difference integration of a [`Model`] on the CPU.
@@ -242,26 +243,29 @@ impl CpuSolver {
     pub fn stable_step(&self) -> (f64, usize) {
         let mut best = (f64::INFINITY, 0);
         for e in 0..self.model.element_count() {
-            let (ue, ve) = self.gather(e);
-            let out = evaluate_state(
-                self.model.params(e),
-                &self.geometry[e],
-                &self.model.corners[e],
-                &ue,
-                &ve,
-                &Dissipation::default(),
-                0.0,
-                if self.s.plastic.is_empty() {
-                    &PlasticState::VIRGIN
-                } else {
-                    &self.s.plastic[e]
-                },
-            );
+            let out = self.evaluate(e, &Dissipation::default(), 0.0);
             if out.dt < best.0 {
                 best = (out.dt, e);
             }
         }
         best
+    }
+
+    /// Element `e` at the current displacements and velocities from its plastic state, with the
+    /// dissipative state `prev` of the step `dt_prev` before.
+    #[inline(always)]
+    fn evaluate(&self, e: usize, prev: &Dissipation, dt_prev: f64) -> ElementOut {
+        let (ue, ve) = self.gather(e);
+        evaluate_state(
+            self.model.params(e),
+            &self.geometry[e],
+            &self.model.corners[e],
+            &ue,
+            &ve,
+            prev,
+            dt_prev,
+            self.s.plastic.get(e).unwrap_or(&PlasticState::VIRGIN),
+        )
     }
 
     #[inline(always)] // not inlined otherwise (stack spills in `step`; +18 % throughput measured)
@@ -316,26 +320,12 @@ impl CpuSolver {
         let plastic = !self.s.plastic.is_empty();
         for e in 0..self.model.element_count() {
             let q = self.model.quads[e];
-            let (ue, ve) = self.gather(e);
             let prev = if keep {
                 self.s.dissipation[e]
             } else {
                 Dissipation::default()
             };
-            let out = evaluate_state(
-                self.model.params(e),
-                &self.geometry[e],
-                &self.model.corners[e],
-                &ue,
-                &ve,
-                &prev,
-                self.s.dt_prev,
-                if plastic {
-                    &self.s.plastic[e]
-                } else {
-                    &PlasticState::VIRGIN
-                },
-            );
+            let out = self.evaluate(e, &prev, self.s.dt_prev);
             if out.min_corner.is_nan() || out.min_corner <= 0.0 {
                 return Err(format!(
                     "{} inverted: smallest corner Jacobian ratio {:.3e}; reduce time_step_scale, \
@@ -356,11 +346,7 @@ impl CpuSolver {
             if keep {
                 self.s.hourglass_work += out.hourglass_work;
                 self.s.bulk_work += out.bulk_work;
-                self.s.dissipation[e] = Dissipation {
-                    hourglass_q: out.hourglass_q,
-                    bulk_p: out.bulk_p,
-                    bulk_hoop: out.bulk_hoop,
-                };
+                self.s.dissipation[e] = out.dissipation;
             }
             if plastic {
                 self.s.plastic[e] = out.plastic;

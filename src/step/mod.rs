@@ -1,4 +1,5 @@
-//! Time stepping: the explicit central-difference step and what both backends share.
+//! Time stepping: the explicit central-difference step and what both backends share. The CPU
+//! reference solver is [`cpu`], the GPU's [`crate::gpu::solver`].
 //!
 //! One step, as in the explicit flowchart (Belytschko, Box X.?):
 //! 1. element stage: nodal forces f_n from u_n (and the lagged v^{n-1/2} for the viscous parts),
@@ -11,9 +12,8 @@
 //! 5. u_{n+1} = u_n + dt^{n+1/2} v^{n+1/2}, t_{n+1} = t_n + dt^{n+1/2}.
 
 pub mod cpu;
-pub mod element;
-pub mod plastic;
 
+use crate::element::plastic::PlasticState;
 use crate::error::Result;
 
 /// Longest a [`Solver::advance`] call runs without an event before it returns (seconds).
@@ -198,7 +198,7 @@ pub struct Snapshot {
     /// Velocities at t_n, (v^{n-1/2} + v^{n+1/2}) / 2.
     pub velocity: Vec<[f64; 2]>,
     /// Plastic state of every element at t_n (empty for a model without a J2 plastic material).
-    pub plastic: Vec<plastic::PlasticState>,
+    pub plastic: Vec<PlasticState>,
 }
 
 /// Why a run stopped early.
@@ -261,7 +261,7 @@ pub trait Solver {
     ///
     /// # Errors
     /// A failed device readback.
-    fn plastic_now(&mut self) -> Result<Vec<plastic::PlasticState>> {
+    fn plastic_now(&mut self) -> Result<Vec<PlasticState>> {
         Ok(Vec::new())
     }
 

@@ -4,12 +4,11 @@
 use std::collections::BTreeMap;
 
 use super::case::{eval, Metric, MetricKind};
-use crate::contact::surface::Surface;
+use crate::element::plastic::PlasticState;
+use crate::model::surface::Surface;
 use crate::model::Model;
 use crate::output::fields::{element_fields, element_fields_state};
 use crate::scene::RigidWall;
-use crate::step::element::{evaluate_with, Dissipation};
-use crate::step::plastic::PlasticState;
 use crate::step::Sample;
 
 /// A surface node touches a rigid wall when its distance to the wall is below this fraction of
@@ -59,16 +58,7 @@ pub fn contact_pressures(
     let mut force = vec![[0.0f64; 2]; model.node_count()];
     for e in b.elements.clone() {
         let q = model.quads[e];
-        let ue = q.map(|i| u[i as usize]);
-        let out = evaluate_with(
-            model.params(e),
-            &model.geometry(e),
-            &model.corners[e],
-            &ue,
-            &[[0.0; 2]; 4],
-            &Dissipation::default(),
-            0.0,
-        );
+        let out = model.element_at(e, u, &PlasticState::VIRGIN);
         for (a, &n) in q.iter().enumerate() {
             force[n as usize][0] += out.force[a][0];
             force[n as usize][1] += out.force[a][1];
@@ -140,7 +130,7 @@ pub struct RunData<'a> {
     /// The run's variables (case and level).
     pub vars: &'a BTreeMap<String, f64>,
     /// The plastic state of every element at the end (empty without a J2 plastic material).
-    pub plastic: &'a [crate::step::plastic::PlasticState],
+    pub plastic: &'a [PlasticState],
 }
 
 /// The least-squares line through `points` (t, v): its slope and its value at the mean t;

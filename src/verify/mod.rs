@@ -384,12 +384,7 @@ fn run_one(
     let _ = std::fs::remove_dir_all(&dir);
     let displacement = solver.displacement_now()?;
     let plastic = solver.plastic_now()?;
-    let contacts: Vec<String> = model
-        .contacts
-        .iter()
-        .map(|c| c.name.clone())
-        .chain(model.walls.iter().map(|w| w.name.clone()))
-        .collect();
+    let contacts = model.interface_names();
     let vars = case.variables(level);
     let data = metric::RunData {
         model: &model,

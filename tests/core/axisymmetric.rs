@@ -95,7 +95,7 @@ fn triangles_of_a_mixed_gmsh_mesh_give_the_exact_hoop_stress_and_masses_per_radi
     let tris = model
         .quads
         .iter()
-        .filter(|q| ricochet::step::element::is_triangle(q))
+        .filter(|q| ricochet::geometry::is_triangle(q))
         .count();
     assert_eq!((model.element_count(), tris), (55, 35));
     // rho * integral of r over the unit square = rho / 2.
@@ -114,16 +114,16 @@ fn triangles_of_a_mixed_gmsh_mesh_give_the_exact_hoop_stress_and_masses_per_radi
     let (mut energy, mut exact) = (0.0, 0.0);
     for el in 0..model.element_count() {
         let q = model.quads[el];
-        let out = ricochet::step::element::evaluate_with(
+        let out = ricochet::element::evaluate_with(
             model.params(el),
             &model.geometry(el),
             &model.corners[el],
             &q.map(|i| u[i as usize]),
             &[[0.0; 2]; 4],
-            &ricochet::step::element::Dissipation::default(),
+            &ricochet::element::Dissipation::default(),
             0.0,
         );
-        if ricochet::step::element::is_triangle(&q) {
+        if ricochet::geometry::is_triangle(&q) {
             let x = q.map(|i| model.position[i as usize]);
             let area = 0.5
                 * ((x[1][0] - x[0][0]) * (x[2][1] - x[0][1])

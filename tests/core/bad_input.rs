@@ -8,14 +8,7 @@ use std::time::{Duration, Instant};
 
 use crate::common::*;
 
-const MATERIAL: &str = r#"
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
-"#;
+const MATERIAL: &str = concat!("\n", steel!(), "\n");
 
 const BODY: &str = r#"
 [[body]]
@@ -757,7 +750,7 @@ fn overlap_check_finds_one_overlap_among_many_quads_by_its_grid() {
     // diagonal neighbour is found, and the check takes about one pass.
     let mesh = ricochet::mesh::rectangle([0.0, 0.0], [1.0, 1.0], [200, 200]);
     assert_eq!(
-        ricochet::mesh::overlapping_quads(&mesh.nodes, &mesh.quads),
+        ricochet::geometry::overlapping_quads(&mesh.nodes, &mesh.quads),
         None
     );
     let mut nodes = mesh.nodes.clone();
@@ -768,7 +761,8 @@ fn overlap_check_finds_one_overlap_among_many_quads_by_its_grid() {
         nodes.push([0.5 + 0.5 * h + dx * h, 0.5 + 0.5 * h + dy * h]);
     }
     quads.push([base, base + 1, base + 2, base + 3]);
-    let found = ricochet::mesh::overlapping_quads(&nodes, &quads).expect("the overlap is found");
+    let found =
+        ricochet::geometry::overlapping_quads(&nodes, &quads).expect("the overlap is found");
     assert_eq!(found.1, quads.len() - 1);
     // The four quads it covers in part: (100, 100), (101, 100), (100, 101), (101, 101).
     assert!(

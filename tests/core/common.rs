@@ -6,11 +6,12 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use ricochet::element::{evaluate, Dissipation, ElementParams};
 use ricochet::model::Model;
 use ricochet::plan::Plan;
+use ricochet::run::RunResult;
 use ricochet::scene::{Formulation, HourglassForm, Material, MaterialModel, Scene};
 use ricochet::step::cpu::CpuSolver;
-use ricochet::step::element::{evaluate, Dissipation, ElementParams};
 use ricochet::step::{Event, Failure, Sample, Schedule, Solver};
 
 /// Steel: Young's modulus (Pa).
@@ -62,6 +63,19 @@ pub fn build(text: &str) -> (Scene, Model, Plan) {
         ricochet::run::model(&scene).unwrap_or_else(|e| panic!("model does not build: {e}"));
     let plan = Plan::new(&scene, &model);
     (scene, model, plan)
+}
+
+/// Runs scene text on the CPU reference in a temporary folder (removed after) and asserts that
+/// the run completed; the result, the model and the final displacements.
+pub fn run_cpu_text(text: &str, name: &str) -> (RunResult, Model, Vec<[f64; 2]>) {
+    let (scene, model, plan) = build(text);
+    let dir = tmp_dir(name);
+    let mut solver = CpuSolver::new(model.clone(), plan.clone(), ricochet::run::schedule(&scene));
+    let r = ricochet::run::run(&scene, &model, &plan, &mut solver, &dir, None).expect("run");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(r.summary.status, "completed", "{}", r.summary.message);
+    let u = solver.displacement().to_vec();
+    (r, model, u)
 }
 
 /// A fresh, empty temporary folder for this test process.

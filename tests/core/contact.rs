@@ -9,6 +9,7 @@ use ricochet::step::cpu::CpuSolver;
 use ricochet::step::Sample;
 
 use crate::common::*;
+use crate::scene_text::STEEL;
 
 #[path = "../shared/compare.rs"]
 mod compare;
@@ -16,13 +17,9 @@ mod compare;
 mod scenes;
 use scenes::*;
 
+/// [`run_cpu_text`] without the displacements.
 fn run_text(text: &str, name: &str) -> (RunResult, Model) {
-    let (scene, model, plan) = build(text);
-    let dir = tmp_dir(name);
-    let mut solver = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
-    let r = run(&scene, &model, &plan, &mut solver, &dir, None).expect("run");
-    let _ = std::fs::remove_dir_all(&dir);
-    assert_eq!(r.summary.status, "completed", "{}", r.summary.message);
+    let (r, model, _) = run_cpu_text(text, name);
     (r, model)
 }
 
@@ -145,24 +142,15 @@ fn rod_against_a_target_of_1e4_times_its_area_rebounds_as_the_mismatch_formula_s
 #[test]
 fn penalty_rods_with_omega_dt_0_3_keep_the_restitution_within_1_percent() {
     let n = 80;
-    let s = penalty_scale_for(n, 0.3);
-    let text = rod_scene(
-        n,
-        Some(1.0),
-        "penalty",
-        &format!("penalty_scale = {s:e}"),
-        2.0,
-    );
+    let (s, text) = penalty_rods(n);
     let (r, model) = run_text(&text, "penalty_rods");
     let last = &r.samples.last().unwrap().0;
-    let (v1, v2) = (last.body_velocity[0][0], last.body_velocity[1][0]);
-    let e = (v2 - v1) / V0;
+    let e = restitution(last);
     let (lag, _) = run_text(
         &rod_scene(n, Some(1.0), "lagrange", "", 2.0),
         "penalty_rods_lagrange",
     );
-    let ll = &lag.samples.last().unwrap().0;
-    let e_lagrange = (ll.body_velocity[1][0] - ll.body_velocity[0][0]) / V0;
+    let e_lagrange = restitution(&lag.samples.last().unwrap().0);
     let p0 = model.bodies[0].mass * V0;
     let dp = (momentum(&model, last) - p0).abs() / p0;
     let e0 = 0.5 * model.bodies[0].mass * V0 * V0;
@@ -475,12 +463,7 @@ end_time = 2.0e-5
 history_interval = 1.0e-6
 bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{STEEL}
 
 [[body]]
 name = "lower"

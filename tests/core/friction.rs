@@ -49,16 +49,7 @@ fn rows(text: &str, name: &str) -> (Vec<Row>, f64, f64) {
 
 #[test]
 fn a_block_sliding_on_a_clamped_block_decelerates_at_mu_g() {
-    for (name, text) in [
-        ("floor", block_on_floor(2.0e-3, "lagrange")),
-        ("block", block_on_block(2.0e-3, "lagrange")),
-        ("floor, penalty", block_on_floor(2.0e-3, "penalty")),
-        ("block, penalty", block_on_block(2.0e-3, "penalty")),
-        (
-            "floor, penalty, softer tangent",
-            block_on_floor(2.0e-3, "penalty") + "friction_stiffness = 0.25\n",
-        ),
-    ] {
+    for (name, text) in sliding_cases(2.0e-3) {
         let (rows, balance, mass) = rows(&text, &format!("friction-{name}"));
         // Least-squares deceleration over the run.
         let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.0, r.1)).collect();

@@ -2,36 +2,19 @@
 //! self-contact: the scene forms, the flat tables, a pile of disks and a ring pressed onto itself.
 
 use ricochet::contact::ContactSet;
-use ricochet::run::{run, schedule, RunResult};
 use ricochet::scene::Scene;
-use ricochet::step::cpu::CpuSolver;
 
 use crate::common::*;
 
-use crate::stress::penetration::{interpenetration, self_penetration};
+use crate::stress::penetration::self_penetration;
 
-fn asset(name: &str) -> String {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("assets")
-        .join(name);
-    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
+#[path = "../shared/general_checks.rs"]
+mod general_checks;
+use general_checks::{asset, check_pile, check_ring, most_active, PILE_H, RING_T};
 
 /// Three small blocks and `extra`.
 fn blocks(extra: &str) -> String {
-    let mut s = String::from(
-        r#"
-[run]
-end_time = 1.0e-5
-
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
-"#,
-    );
+    let mut s = String::from(concat!("\n[run]\nend_time = 1.0e-5\n\n", steel!(), "\n"));
     for (k, name) in ["a", "b", "c"].iter().enumerate() {
         s.push_str(&format!(
             "\n[[body]]\nname = \"{name}\"\nmaterial = \"steel\"\nmesh = {{ rectangle = {{ origin = [{x}, 0.0], size = [0.1, 0.05], cells = [2, 2] }} }}\n",
@@ -216,91 +199,57 @@ fn a_group_is_one_pass_whose_tables_tag_bodies_and_passes() {
     assert_eq!(t.margin, set.margin());
 }
 
-/// Runs scene text on the CPU; the result and the final displacements.
-fn run_cpu(text: &str, name: &str) -> (RunResult, ricochet::model::Model, Vec<[f64; 2]>) {
-    let (scene, model, plan) = build(text);
-    let dir = tmp_dir(name);
-    let mut solver = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
-    let r = run(&scene, &model, &plan, &mut solver, &dir, None).expect("run");
-    let _ = std::fs::remove_dir_all(&dir);
-    assert_eq!(r.summary.status, "completed", "{}", r.summary.message);
-    let u = solver.displacement().to_vec();
-    (r, model, u)
-}
-
 #[test]
 fn a_pile_of_sixteen_disks_in_one_general_contact_keeps_the_energy_and_no_node_inside_another_disk()
 {
-    let (r, model, u) = run_cpu(&asset("pile.toml"), "pile");
+    let (r, model, u) = run_cpu_text(&asset("pile.toml"), "pile");
     assert_eq!(model.bodies.len(), 16);
-    let err = r.summary.max_energy_error;
-    let deepest = interpenetration(&model, &u);
-    // One column block for the whole group.
-    let active = r
-        .samples
-        .iter()
-        .map(|(s, _)| s.contacts[0].active_nodes)
-        .max()
-        .unwrap_or(0);
-    let floor = r
-        .samples
-        .iter()
-        .map(|(s, _)| s.contacts[1].active_nodes)
-        .max()
-        .unwrap_or(0);
-    let pen = r
-        .samples
-        .iter()
-        .map(|(s, _)| s.contacts[0].max_penetration)
-        .fold(0.0, f64::max);
-    let h = 0.01 / 4.0;
-    println!(
-        "pile: {} steps, energy error {err:.2e}, deepest node inside another disk at the end {deepest:.2e} m \
-         ({:.1e} h), reported penetration {pen:.2e} m, most active nodes: disks {active}, floor {floor}",
-        r.summary.steps,
-        deepest / h
-    );
-    // Measured: energy error 2.1e-5, no node inside another disk (0 m), reported penetration
-    // 1e-16 m, up to 14 nodes in contact between disks.
     assert_eq!(
         r.samples[0].0.contacts.len(),
         2,
         "one history block per table"
     );
-    assert!(
-        active > 10 && floor > 0,
-        "the disks met each other and the floor"
+    // One column block for the whole group.
+    let p = check_pile(&r, &model, &u, 1e-6);
+    let floor = most_active(&r, 1);
+    let pen = r
+        .samples
+        .iter()
+        .map(|(s, _)| s.contacts[0].max_penetration)
+        .fold(0.0, f64::max);
+    let h = PILE_H;
+    println!(
+        "pile: {} steps, energy error {:.2e}, deepest node inside another disk at the end {:.2e} m \
+         ({:.1e} h), reported penetration {pen:.2e} m, most active nodes: disks {}, floor {floor}",
+        r.summary.steps,
+        p.err,
+        p.deepest,
+        p.deepest / h,
+        p.active
     );
-    assert!(err < 1e-3, "energy balance {err:e}");
-    assert!(deepest < 1e-6 * h, "{deepest:e} m inside");
+    // Measured: energy error 2.1e-5, no node inside another disk (0 m), reported penetration
+    // 1e-16 m, up to 14 nodes in contact between disks.
+    assert!(floor > 0, "the disks met the floor");
     assert!(pen < 1e-6 * h, "{pen:e}");
 }
 
 #[test]
 fn a_ring_pressed_onto_itself_stays_out_of_its_own_surface_with_self_contact_only() {
     let text = asset("ring_crush.toml");
-    let t = 0.002; // element size across the wall
-    let (r, model, u) = run_cpu(&text, "ring-self");
-    let err = r.summary.max_energy_error;
-    let inside = self_penetration(&model, &u, 0);
-    let other = interpenetration(&model, &u);
-    let active = r
-        .samples
-        .iter()
-        .map(|(s, _)| s.contacts[1].active_nodes)
-        .max()
-        .unwrap_or(0);
+    let t = RING_T; // element size across the wall
+    let (r, model, u) = run_cpu_text(&text, "ring-self");
+    let ring = check_ring(&r, &model, &u, 1e-6);
     println!(
-        "ring, self-contact: {} steps, energy error {err:.2e}, deepest node inside its own ring \
-         {inside:.2e} m ({:.1e} h), inside the punch {other:.2e} m, most self-contact nodes {active}",
+        "ring, self-contact: {} steps, energy error {:.2e}, deepest node inside its own ring \
+         {:.2e} m ({:.1e} h), inside the punch {:.2e} m, most self-contact nodes {}",
         r.summary.steps,
-        inside / t
+        ring.err,
+        ring.inside,
+        ring.inside / t,
+        ring.other,
+        ring.active
     );
     // Measured: 16 nodes in self-contact, energy error 7.2e-4, no node inside (0 m).
-    assert!(active > 5, "the ring met itself");
-    assert!(err < 1e-3, "energy balance {err:e}");
-    assert!(inside < 1e-6 * t, "{inside:e} m inside");
-    assert!(other < 1e-6 * t, "{other:e} m inside");
     // The self-contact exerts no net force on the ring.
     for (s, _) in &r.samples {
         assert_eq!(s.contacts[1].force, [0.0; 2]);
@@ -314,7 +263,7 @@ fn a_ring_pressed_onto_itself_stays_out_of_its_own_surface_with_self_contact_onl
             .find("[[rigid_wall]]")
             .expect("a wall after it");
     let without = format!("{}{}", &text[..start], &text[end..]);
-    let (_, model, u) = run_cpu(&without, "ring-noself");
+    let (_, model, u) = run_cpu_text(&without, "ring-noself");
     let through = self_penetration(&model, &u, 0);
     println!("ring, no self-contact: deepest node inside its own ring {through:.2e} m");
     // Measured: 3.9e-4 m (a node is at most h / 2 = 1e-3 m from the sides of an element it is in).
@@ -333,7 +282,7 @@ fn bodies_overlapping_at_t0_in_a_group_are_moved_apart_and_stay_at_rest() {
         assert!((worst - 2e-5).abs() < 1e-12, "{worst:e}");
         let mut again = ContactSet::new(&model).expect("contact");
         assert!(again.initial_overlaps(&model).is_empty(), "overlaps left");
-        let (r, _, _) = run_cpu(&text, "group-overlap");
+        let (r, _, _) = run_cpu_text(&text, "group-overlap");
         let mut peak: f64 = 0.0;
         for (s, _) in &r.samples {
             peak = peak.max(s.kinetic.abs() + s.internal.abs() + s.hourglass.abs());

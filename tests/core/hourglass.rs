@@ -12,14 +12,15 @@
 //!
 //! The runs go through `run::run`, and the checks read `history.csv`.
 
+use ricochet::geometry::HOURGLASS_BASE;
 use ricochet::model::Model;
 use ricochet::plan::Plan;
 use ricochet::run;
 use ricochet::scene::Scene;
 use ricochet::step::cpu::CpuSolver;
-use ricochet::step::element::HOURGLASS_BASE;
 
 use crate::common::*;
+use crate::scene_text::{fixed_step_run, STEEL};
 
 const H: f64 = 0.01; // element size (m)
 const T: f64 = 0.01; // thickness (m)
@@ -29,18 +30,9 @@ const NY: usize = 3;
 fn scene_text(form: &str, coefficient: f64, dt: f64, steps: usize) -> String {
     format!(
         r#"
-[run]
-end_time = {end:e}
-time_step = {dt:e}
-history_interval = {dt:e}
-bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
+{run}
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{STEEL}
 
 [[body]]
 name = "block"
@@ -50,7 +42,7 @@ thickness = {T}
 mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [{sx}, {sy}], cells = [{NX}, {NY}] }} }}
 hourglass = {{ form = "{form}", coefficient = {coefficient} }}
 "#,
-        end = dt * steps as f64,
+        run = fixed_step_run(dt * steps as f64, dt),
         sx = H * NX as f64,
         sy = H * NY as f64,
     )

@@ -10,6 +10,7 @@ use ricochet::run;
 use ricochet::step::cpu::CpuSolver;
 
 use crate::common::*;
+use crate::scene_text::STEEL;
 
 fn one_body(mesh: &str, extra: &str) -> String {
     format!(
@@ -18,12 +19,7 @@ fn one_body(mesh: &str, extra: &str) -> String {
 end_time = 2.0e-4
 history_interval = 1.0e-5
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{STEEL}
 
 [[body]]
 name = "b"

@@ -12,6 +12,7 @@ use ricochet::scene::Scene;
 use serde_json::Value;
 
 use crate::common::*;
+use crate::scene_text::steel_of;
 
 fn asset(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -126,14 +127,7 @@ fn triangles_are_written_as_vtk_triangle_cells() {
             ),
         )
         .unwrap();
-        let out = base.join(format);
-        let o = run_cpu(&scene, &out, &[]);
-        assert_eq!(o.status.code(), Some(0), "{o:?}");
-        let precision = if format == "binary" {
-            F32_ROUNDING
-        } else {
-            F64_ROUNDING
-        };
+        let (out, precision) = run_in_format(&base, &scene, format);
         check_vtu_cells_with_meshio(
             &out,
             3,
@@ -145,6 +139,20 @@ fn triangles_are_written_as_vtk_triangle_cells() {
         );
     }
     let _ = std::fs::remove_dir_all(&base);
+}
+
+/// Runs `scene` into `base/<format>` (the run must succeed); that folder, and the rounding the
+/// fields' `format` keeps (single precision for `binary`, else double).
+fn run_in_format(base: &Path, scene: &Path, format: &str) -> (PathBuf, f64) {
+    let out = base.join(format);
+    let o = run_cpu(scene, &out, &[]);
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    let precision = if format == "binary" {
+        F32_ROUNDING
+    } else {
+        F64_ROUNDING
+    };
+    (out, precision)
 }
 
 #[test]
@@ -169,14 +177,7 @@ fn binary_fields_hold_the_ascii_values_in_a_quarter_of_the_bytes() {
             .replace("cells = [20, 10]", "cells = [100, 50]"),
         )
         .unwrap();
-        let out = base.join(format);
-        let o = run_cpu(&scene, &out, &[]);
-        assert_eq!(o.status.code(), Some(0), "{o:?}");
-        let precision = if format == "binary" {
-            F32_ROUNDING
-        } else {
-            F64_ROUNDING
-        };
+        let (out, precision) = run_in_format(&base, &scene, format);
         check_vtu_with_meshio(&out, 3, 101 * 51, 5000, [0.0, 0.0, 0.1, 0.05], precision);
         let last = out.join("fields/block_00002.vtu");
         let head = std::fs::read(&last).unwrap();
@@ -507,17 +508,14 @@ fn plan_has_only_the_stages_a_scene_needs() {
         ]
     );
     // A boundary adds its pass; no hourglass control adds none.
-    let (_, _, p) = build(
+    let (_, _, p) = build(concat!(
         r#"
 [run]
 end_time = 1.0e-5
 bulk_viscosity = { linear = 0.0, quadratic = 0.0 }
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+"#,
+        steel!(),
+        r#"
 [[body]]
 name = "b"
 material = "steel"
@@ -527,8 +525,8 @@ hourglass = { form = "none" }
 body = "b"
 region = { min = [-1.0, -1.0], max = [1.0e-9, 1.0] }
 velocity = { x = 0.0, y = 0.0 }
-"#,
-    );
+"#
+    ));
     assert_eq!(
         p.stages,
         vec![
@@ -713,19 +711,15 @@ fn block_scene(run_extra: &str, model: &str, body_extra: &str) -> String {
 end_time = 2.0e-4
 {run_extra}
 
-[[material]]
-name = "steel"
-model = "{model}"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{steel}
 
 [[body]]
 name = "block"
 material = "steel"
 mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [0.1, 0.05], cells = [20, 10] }} }}
 {body_extra}
-"#
+"#,
+        steel = steel_of(model),
     )
 }
 
@@ -739,24 +733,30 @@ fn expect_failed_run(case: &str, text: &str) -> (String, String) {
     let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
     assert_eq!(o.status.code(), Some(3), "{case}: {stderr}");
     assert!(!stderr.contains("panicked"), "{case}: {stderr}");
-    let s = summary(&out);
-    assert_eq!(s["status"], "failed", "{case}");
-    let message = s["message"].as_str().unwrap().to_string();
+    let message = failure_message(case, &out);
     assert!(
         stderr.contains(&message),
         "{case}: stderr lacks the message: {stderr}"
     );
-    // The history written up to the failure is kept, with its header.
+    let _ = std::fs::remove_dir_all(&dir);
+    (message, stderr)
+}
+
+/// The message of the failed run whose outputs are in `out`: its summary says "failed", the
+/// history written up to the failure is kept, with its header, and the message names the step
+/// and the time.
+fn failure_message(case: &str, out: &Path) -> String {
+    let s = summary(out);
+    assert_eq!(s["status"], "failed", "{case}");
+    let message = s["message"].as_str().unwrap().to_string();
     let (header, rows) = read_csv(&out.join("history.csv"));
     assert_eq!(header[0], "time");
     assert!(!rows.is_empty());
-    // The message names the step and the time.
     assert!(
         message.starts_with("step ") && message.contains(", t = "),
         "{case}: {message}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
-    (message, stderr)
+    message
 }
 
 /// Runs a scene through the library with `time_step_scale` forced to `scale` (a scene file
@@ -769,17 +769,8 @@ fn expect_failed_scaled_run(case: &str, text: &str, scale: f64) -> String {
     sched.time_step_scale = scale;
     let mut solver = ricochet::step::cpu::CpuSolver::new(model.clone(), plan.clone(), sched);
     let r = ricochet::run::run(&scene, &model, &plan, &mut solver, &dir, None).expect("run");
-    let s = summary(&dir);
-    assert_eq!(s["status"], "failed", "{case}");
-    let message = s["message"].as_str().unwrap().to_string();
+    let message = failure_message(case, &dir);
     assert_eq!(message, r.summary.message);
-    let (header, rows) = read_csv(&dir.join("history.csv"));
-    assert_eq!(header[0], "time");
-    assert!(!rows.is_empty());
-    assert!(
-        message.starts_with("step ") && message.contains(", t = "),
-        "{case}: {message}"
-    );
     let _ = std::fs::remove_dir_all(&dir);
     message
 }

@@ -5,10 +5,11 @@
 //! MacNeal-Harder patch, and for both plane strain and plane stress; plus the neo-Hookean
 //! analogue with a large homogeneous deformation.
 
+use ricochet::element::{evaluate, Dissipation};
 use ricochet::scene::{Formulation, HourglassForm, MaterialModel};
-use ricochet::step::element::{evaluate, Dissipation};
 
 use crate::common::*;
+use crate::scene_text::steel_of;
 
 #[path = "../shared/traction.rs"]
 mod traction;
@@ -115,12 +116,7 @@ fn explicit_scene(
 end_time = 1.0e-3
 bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
 
-[[material]]
-name = "steel"
-model = "{model}"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{steel}
 
 [[body]]
 name = "patch"
@@ -131,7 +127,8 @@ mesh = {{ nodes = [{}], quads = [{}] }}
 hourglass = {{ form = "{hourglass}", coefficient = 0.1 }}
 "#,
         nodes.join(", "),
-        quads.join(", ")
+        quads.join(", "),
+        steel = steel_of(model),
     )
 }
 

@@ -4,10 +4,10 @@
 //! energy audit with the `plastic_work` column, the objectivity of the yielded state under rigid
 //! rotations, and the VTU fields.
 
+use ricochet::element::plastic::{von_mises, PlasticState};
 use ricochet::model::Model;
 use ricochet::output::fields::{element_fields_state, ElementFields};
 use ricochet::step::cpu::CpuSolver;
-use ricochet::step::plastic::{von_mises, PlasticState};
 use ricochet::step::{Event, Snapshot, Solver};
 
 use crate::common::*;

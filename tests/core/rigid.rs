@@ -7,10 +7,10 @@
 use std::f64::consts::PI;
 use std::path::Path;
 
+use ricochet::element::{evaluate, Dissipation};
 use ricochet::output::fields::element_fields;
 use ricochet::plan::Plan;
 use ricochet::scene::{Formulation, HourglassForm, MaterialModel, Scene};
-use ricochet::step::element::{evaluate, Dissipation};
 
 use crate::common::*;
 

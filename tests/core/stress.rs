@@ -6,10 +6,10 @@
 
 use std::path::Path;
 
+use ricochet::element::{evaluate, Dissipation};
 use ricochet::model::Model;
 use ricochet::run::{run, schedule};
 use ricochet::step::cpu::CpuSolver;
-use ricochet::step::element::{evaluate, Dissipation};
 use ricochet::step::{Counters, Event, Solver};
 use serde_json::Value;
 

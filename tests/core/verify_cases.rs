@@ -157,7 +157,8 @@ fn a_missed_bound_makes_verify_exit_4_and_name_the_case() {
 /// wall (ramped, mass damping: dynamic relaxation). Exact: uniaxial stress sigma_yy = -p, so
 /// every node on the wall carries the (nominal) contact pressure p, and the loaded zone is the
 /// whole bottom, of reference width 1.
-const BLOCK_ON_WALL: &str = r#"
+const BLOCK_ON_WALL: &str = concat!(
+    r#"
 [case]
 name = "block"
 title = "Block pressed on a rigid wall"
@@ -207,12 +208,9 @@ end_time = 1.0e-2
 history_interval = 1.0e-3
 mass_damping = 1.2e4
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+"#,
+    steel!(),
+    r#"
 
 [[body]]
 name = "block"
@@ -238,7 +236,8 @@ body = "block"
 region = { min = [-0.01, -0.01], max = [0.01, 0.51] }
 velocity = { x = 0.0 }
 '''
-"#;
+"#
+);
 
 #[test]
 fn contact_pressure_metrics_give_the_uniform_pressure_of_a_block_pressed_on_a_wall() {

@@ -19,6 +19,7 @@ use ricochet::output::fields::element_fields;
 use ricochet::plan::Plan;
 
 use crate::common::*;
+use crate::scene_text::{fixed_step_run, STEEL_NU0};
 
 const H: f64 = 0.01; // element size (m)
 const T: f64 = 0.01; // thickness (m)
@@ -31,18 +32,9 @@ fn rod_scene(cells: usize, c_number: f64, steps: usize, hourglass: &str, boundar
     let dt = c_number * H / bar_speed();
     let mut s = format!(
         r#"
-[run]
-end_time = {end:e}
-time_step = {dt:e}
-history_interval = {dt:e}
-bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
+{run}
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.0
+{STEEL_NU0}
 
 [[body]]
 name = "rod"
@@ -53,7 +45,7 @@ mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [{len}, {H}], cells = [{cel
 hourglass = {{ form = "{hourglass}", coefficient = 0.1 }}
 initial_velocity = [5.0, 0.0]
 "#,
-        end = dt * steps as f64,
+        run = fixed_step_run(dt * steps as f64, dt),
         len = H * cells as f64,
     );
     if boundary {

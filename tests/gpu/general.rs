@@ -4,20 +4,17 @@
 use super::*;
 
 use ricochet::gpu::contact::ContactOptions;
+use ricochet::run::RunResult;
 
-use super::stress::penetration::{interpenetration, self_penetration};
+use super::stress::penetration::interpenetration;
+use crate::scene_text::STEEL;
 
 #[path = "../shared/compare.rs"]
 mod compare;
 
-fn asset_path(rel: &str) -> String {
-    std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("assets")
-            .join(rel),
-    )
-    .expect("asset exists")
-}
+#[path = "../shared/general_checks.rs"]
+mod general_checks;
+use general_checks::{check_pile, check_ring, most_active, PILE_H};
 
 fn tmp_dir(name: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!(
@@ -33,7 +30,7 @@ fn run_gpu(
     text: &str,
     name: &str,
     multi: Option<bool>,
-) -> (ricochet::run::RunResult, Model, Vec<[f64; 2]>) {
+) -> (RunResult, Model, Vec<[f64; 2]>) {
     let options = ContactOptions {
         multi,
         ..ContactOptions::default()
@@ -48,7 +45,7 @@ fn run_gpu_with(
     text: &str,
     name: &str,
     options: ContactOptions,
-) -> (ricochet::run::RunResult, Model, Vec<[f64; 2]>, u32) {
+) -> (RunResult, Model, Vec<[f64; 2]>, u32) {
     let (scene, model, plan) = load(text, name);
     let mut gpu =
         GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
@@ -67,7 +64,7 @@ fn run_gpu_with(
 }
 
 /// Runs scene text on the CPU reference: the result and the final displacements.
-fn run_cpu(text: &str, name: &str) -> (ricochet::run::RunResult, Vec<[f64; 2]>) {
+fn run_cpu(text: &str, name: &str) -> (RunResult, Vec<[f64; 2]>) {
     let (scene, model, plan) = load(text, name);
     let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
     let dir = tmp_dir(name);
@@ -93,7 +90,9 @@ fn displacement_bits(u: &[[f64; 2]]) -> Vec<[u64; 2]> {
     u.iter().map(|x| x.map(f64::to_bits)).collect()
 }
 
-fn history_bits(r: &ricochet::run::RunResult) -> Vec<u64> {
+/// The bits of every history row's energies and contact reports, for comparing two runs bit for
+/// bit.
+fn history_bits(r: &RunResult) -> Vec<u64> {
     r.samples
         .iter()
         .flat_map(|(s, _)| {
@@ -111,64 +110,50 @@ fn history_bits(r: &ricochet::run::RunResult) -> Vec<u64> {
         .collect()
 }
 
+/// Asserts that two runs (each its result and final displacements) gave the same history and
+/// displacement bits; `what` says which runs.
+fn assert_same_bits(a: (&RunResult, &[[f64; 2]]), b: (&RunResult, &[[f64; 2]]), what: &str) {
+    assert_eq!(history_bits(a.0), history_bits(b.0), "{what}");
+    assert_eq!(displacement_bits(a.1), displacement_bits(b.1), "{what}");
+}
+
 #[test]
 fn gpu_pile_in_one_general_contact_keeps_the_energy_no_node_inside_and_the_same_bits() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let text = asset_path("pile.toml");
+    let text = asset("pile.toml");
     let (r, model, u) = run_gpu(&ctx, &text, "pile-a", None);
     let (r2, _, u2) = run_gpu(&ctx, &text, "pile-b", None);
-    let h = 0.01 / 4.0;
-    let err = r.summary.max_energy_error;
-    let deepest = interpenetration(&model, &u);
-    let active = r
-        .samples
-        .iter()
-        .map(|(s, _)| s.contacts[0].active_nodes)
-        .max()
-        .unwrap_or(0);
+    // f32: a node may sit within round-off of the other surface.
+    let p = check_pile(&r, &model, &u, 1e-4);
     println!(
-        "gpu pile: {} steps, energy error {err:.2e}, deepest node inside another disk {deepest:.2e} m \
-         ({:.1e} h), most nodes in disk contact {active}, {} searches, sweeps mean {:.1} max {}, \
+        "gpu pile: {} steps, energy error {:.2e}, deepest node inside another disk {:.2e} m \
+         ({:.1e} h), most nodes in disk contact {}, {} searches, sweeps mean {:.1} max {}, \
          {} bytes read back",
         r.summary.steps,
-        deepest / h,
+        p.err,
+        p.deepest,
+        p.deepest / PILE_H,
+        p.active,
         r.summary.contact_searches,
         r.summary.contact_sweeps_mean,
         r.summary.contact_sweeps_max,
         r.summary.bytes_read_back
     );
-    assert!(active > 10, "the disks met");
-    assert!(err < 1e-3, "energy balance {err:e}");
-    // f32: a node may sit within round-off of the other surface.
-    assert!(deepest < 1e-4 * h, "{deepest:e} m inside");
-    assert_eq!(history_bits(&r), history_bits(&r2), "two GPU runs differ");
-    assert_eq!(displacement_bits(&u), displacement_bits(&u2));
+    assert_same_bits((&r, &u), (&r2, &u2), "two GPU runs differ");
 }
 
 #[test]
 fn gpu_ring_with_self_contact_stays_out_of_its_own_surface() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let (r, model, u) = run_gpu(&ctx, &asset_path("ring_crush.toml"), "ring", None);
-    let t = 0.002;
-    let inside = self_penetration(&model, &u, 0);
-    let other = interpenetration(&model, &u);
-    let active = r
-        .samples
-        .iter()
-        .map(|(s, _)| s.contacts[1].active_nodes)
-        .max()
-        .unwrap_or(0);
+    let (r, model, u) = run_gpu(&ctx, &asset("ring_crush.toml"), "ring", None);
+    let ring = check_ring(&r, &model, &u, 1e-4);
     println!(
-        "gpu ring: energy error {:.2e}, inside its own ring {inside:.2e} m, inside the punch \
-         {other:.2e} m, most self-contact nodes {active}",
-        r.summary.max_energy_error
+        "gpu ring: energy error {:.2e}, inside its own ring {:.2e} m, inside the punch {:.2e} m, \
+         most self-contact nodes {}",
+        ring.err, ring.inside, ring.other, ring.active
     );
-    assert!(active > 5, "the ring met itself");
-    assert!(r.summary.max_energy_error < 1e-3);
-    assert!(inside < 1e-4 * t, "{inside:e} m inside");
-    assert!(other < 1e-4 * t, "{other:e} m inside");
 }
 
 /// The old one-workgroup kernel lost a step's impulses on this scene (contact_energy +154 J ->
@@ -177,7 +162,7 @@ fn gpu_ring_with_self_contact_stays_out_of_its_own_surface() {
 fn gpu_striker_into_plate_follows_the_cpu_contact_energy_row_by_row() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let text = asset_path("stress/striker_plate_gpu_energy.toml");
+    let text = asset("stress/striker_plate_gpu_energy.toml");
     let (rc, _) = run_cpu(&text, "striker-cpu");
     let (rg, _, _) = run_gpu(&ctx, &text, "striker-gpu", None);
     let ke0 = rc.samples[0].0.kinetic;
@@ -210,14 +195,14 @@ fn gpu_striker_into_plate_follows_the_cpu_contact_energy_row_by_row() {
 fn gpu_per_colour_solve_matches_the_one_workgroup_solve_and_the_cpu() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let text = asset_path("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
+    let text = asset("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
     let (r1, model, u1) = run_gpu(&ctx, &text, "pile-one", Some(false));
     let (rm, _, um) = run_gpu(&ctx, &text, "pile-multi", Some(true));
     let (rm2, _, _) = run_gpu(&ctx, &text, "pile-multi2", Some(true));
     let (rc, uc) = run_cpu(&text, "pile-cpu");
     let (du, _) = compare::displacement_difference(&u1, &um);
     let (dc, _) = compare::displacement_difference(&um, &uc);
-    let h = 0.01 / 4.0;
+    let h = PILE_H;
     println!(
         "pile, 0.15 ms: |u one-group - u per-colour| {du:.2e} m, |u per-colour - u cpu| {dc:.2e} m; \
          energy errors {:.1e} / {:.1e} / cpu {:.1e}; sweeps mean {:.1} / {:.1}",
@@ -249,8 +234,8 @@ fn gpu_per_colour_solve_matches_the_one_workgroup_solve_and_the_cpu() {
 
 /// Two contact paths of the GPU on one scene: `a` once, `b` twice.
 struct Paths {
-    ra: ricochet::run::RunResult,
-    rb: ricochet::run::RunResult,
+    ra: RunResult,
+    rb: RunResult,
     model: Model,
     ua: Vec<[f64; 2]>,
     ub: Vec<[f64; 2]>,
@@ -280,17 +265,10 @@ fn compare_paths(
     let (de, ke0) = compare::energy_difference(&ra, &rb);
     let same =
         history_bits(&ra) == history_bits(&rb) && displacement_bits(&ua) == displacement_bits(&ub);
-    assert_eq!(
-        history_bits(&rb),
-        history_bits(&rb2),
-        "{name}: two {} runs differ",
-        b.0
-    );
-    assert_eq!(
-        displacement_bits(&ub),
-        displacement_bits(&ub2),
-        "{name}: two {} runs differ",
-        b.0
+    assert_same_bits(
+        (&rb, &ub),
+        (&rb2, &ub2),
+        &format!("{name}: two {} runs differ", b.0),
     );
     assert_eq!(ra.samples.len(), rb.samples.len());
     if ctx.is_software() {
@@ -337,8 +315,8 @@ fn compare_paths(
 fn gpu_split_rechecks_match_the_one_workgroup_solve() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let pile = asset_path("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
-    let striker = asset_path("stress/striker_plate_gpu_energy.toml");
+    let pile = asset("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
+    let striker = asset("stress/striker_plate_gpu_energy.toml");
     for (name, text) in [("pile", pile), ("striker", striker)] {
         let with = |split: bool| ContactOptions {
             multi: Some(false),
@@ -407,7 +385,7 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
 fn gpu_one_workgroup_contact_stage_matches_the_per_item_kernels() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let pile = asset_path("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
+    let pile = asset("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
     let (head, wall) = pile.split_at(pile.find("[[rigid_wall]]").expect("the pile has a wall"));
     let rough = format!(
         "{}{}",
@@ -421,7 +399,7 @@ fn gpu_one_workgroup_contact_stage_matches_the_per_item_kernels() {
         )
     );
     assert!(rough.contains("penalty") && rough.matches("friction = 0.3").count() == 2);
-    let striker = asset_path("stress/striker_plate_gpu_energy.toml");
+    let striker = asset("stress/striker_plate_gpu_energy.toml");
     for (name, text) in [("pile", pile), ("rough pile", rough), ("striker", striker)] {
         let with = |one: bool| ContactOptions {
             multi: Some(false),
@@ -452,7 +430,7 @@ fn gpu_one_workgroup_contact_stage_matches_the_per_item_kernels() {
         assert!(p.ra.summary.contact_sweeps_max > 0, "{name}: the solve ran");
     }
     // One workgroup takes neither the per-colour solve nor split re-checks.
-    let (scene, model, plan) = load(&asset_path("pile.toml"), "pile.toml");
+    let (scene, model, plan) = load(&asset("pile.toml"), "pile.toml");
     for (multi, split) in [(true, false), (false, true)] {
         let options = ContactOptions {
             multi: Some(multi),
@@ -480,8 +458,8 @@ fn gpu_one_workgroup_contact_stage_matches_the_per_item_kernels() {
 fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let pile = asset_path("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
-    let striker = asset_path("stress/striker_plate_gpu_energy.toml");
+    let pile = asset("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
+    let striker = asset("stress/striker_plate_gpu_energy.toml");
     let with = |group: u32| ContactOptions {
         multi: Some(false),
         group: Some(group),
@@ -523,18 +501,13 @@ fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
             }
             assert!(de <= 1e-5 * ke0, "{name}: energies differ by {de:e} J");
         }
-        assert_eq!(
-            history_bits(&runs[2].0),
-            history_bits(&runs[3].0),
-            "{name}: two runs at 256 threads differ"
-        );
-        assert_eq!(
-            displacement_bits(&runs[2].2),
-            displacement_bits(&runs[3].2),
-            "{name}: two runs differ"
+        assert_same_bits(
+            (&runs[2].0, &runs[2].2),
+            (&runs[3].0, &runs[3].2),
+            &format!("{name}: two runs at 256 threads differ"),
         );
     }
-    let (scene, model, plan) = load(&asset_path("pile.toml"), "pile-group-bad");
+    let (scene, model, plan) = load(&asset("pile.toml"), "pile-group-bad");
     for bad in [4, 96, 512] {
         let e = GpuSolver::with_options(
             ctx.clone(),
@@ -570,8 +543,8 @@ fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
 fn gpu_extrapolated_sweeps_agree_with_plain_ones_in_fewer_sweeps() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let pile = asset_path("pile.toml").replace("end_time = 1.0e-3", "end_time = 4e-4");
-    let striker = asset_path("stress/striker_plate_gpu_energy.toml");
+    let pile = asset("pile.toml").replace("end_time = 1.0e-3", "end_time = 4e-4");
+    let striker = asset("stress/striker_plate_gpu_energy.toml");
     for (name, text) in [("striker", striker), ("pile", pile)] {
         let with = |plain: bool| ContactOptions {
             multi: Some(false),
@@ -606,15 +579,10 @@ fn gpu_extrapolated_sweeps_agree_with_plain_ones_in_fewer_sweeps() {
             se.max_energy_error
         );
         assert!(se.contact_sweeps_max > 0, "{name}: the solve ran");
-        assert_eq!(
-            history_bits(&re),
-            history_bits(&re2),
-            "{name}: two runs differ"
-        );
-        assert_eq!(
-            displacement_bits(&ue),
-            displacement_bits(&ue2),
-            "{name}: two runs differ"
+        assert_same_bits(
+            (&re, &ue),
+            (&re2, &ue2),
+            &format!("{name}: two runs differ"),
         );
         assert_eq!(rp.samples.len(), re.samples.len());
         let accuracy = solve_accuracy(&model);
@@ -652,10 +620,10 @@ fn gpu_search_candidates_contain_every_pair_parry_and_the_narrow_phase_activate(
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let mut scenes: Vec<(String, String)> = vec![
-        ("pile".into(), asset_path("pile.toml")),
-        ("ring".into(), asset_path("ring_crush.toml")),
-        ("disk_wall".into(), asset_path("disk_wall.toml")),
-        ("rods".into(), asset_path("rods_impact.toml")),
+        ("pile".into(), asset("pile.toml")),
+        ("ring".into(), asset("ring_crush.toml")),
+        ("disk_wall".into(), asset("disk_wall.toml")),
+        ("rods".into(), asset("rods_impact.toml")),
     ];
     for s in [
         "corner_first",
@@ -665,7 +633,7 @@ fn gpu_search_candidates_contain_every_pair_parry_and_the_narrow_phase_activate(
         "thin_plate",
         "striker_plate_gpu_energy",
     ] {
-        scenes.push((s.into(), asset_path(&format!("stress/{s}.toml"))));
+        scenes.push((s.into(), asset(&format!("stress/{s}.toml"))));
     }
     // Random pairs: two blocks at random offsets and angles of approach.
     let mut seed = 12345u64;
@@ -689,12 +657,7 @@ fn gpu_search_candidates_contain_every_pair_parry_and_the_narrow_phase_activate(
 end_time = 2.0e-5
 history_interval = 1.0e-5
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{STEEL}
 
 [[body]]
 name = "top"
@@ -807,7 +770,7 @@ bodies = "all"
 fn gpu_and_cpu_pile_of_a_hundred_disks_collide_without_penetration_and_with_the_same_bits() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let text = asset_path("bench/pile_1e4.toml").replace("end_time = 1e-3", "end_time = 2.5e-4");
+    let text = asset("bench/pile_1e4.toml").replace("end_time = 1e-3", "end_time = 2.5e-4");
     assert!(text.contains("end_time = 2.5e-4"), "the pile's end time");
     let (r, model, u) = run_gpu(&ctx, &text, "pile100-a", None);
     let (r2, _, u2) = run_gpu(&ctx, &text, "pile100-b", None);
@@ -815,12 +778,7 @@ fn gpu_and_cpu_pile_of_a_hundred_disks_collide_without_penetration_and_with_the_
     let h = 0.01 / 6.0;
     let gpu_in = interpenetration(&model, &u);
     let cpu_in = interpenetration(&model, &uc);
-    let active = r
-        .samples
-        .iter()
-        .map(|(s, _)| s.contacts[0].active_nodes)
-        .max()
-        .unwrap_or(0);
+    let active = most_active(&r, 0);
     println!(
         "pile of 100, 0.25 ms: {} steps; energy error gpu {:.2e} cpu {:.2e}; deepest node inside \
          another disk gpu {gpu_in:.2e} m cpu {cpu_in:.2e} m; most nodes in disk contact {active}; \
@@ -837,8 +795,7 @@ fn gpu_and_cpu_pile_of_a_hundred_disks_collide_without_penetration_and_with_the_
     assert!(rc.summary.max_energy_error < 1e-3);
     assert!(gpu_in < 1e-4 * h, "{gpu_in:e} m inside");
     assert!(cpu_in < 1e-6 * h, "{cpu_in:e} m inside");
-    assert_eq!(history_bits(&r), history_bits(&r2), "two GPU runs differ");
-    assert_eq!(displacement_bits(&u), displacement_bits(&u2));
+    assert_same_bits((&r, &u), (&r2, &u2), "two GPU runs differ");
 }
 
 /// A candidate buffer far too small at first grows (the step stops, the host enlarges the
@@ -847,7 +804,7 @@ fn gpu_and_cpu_pile_of_a_hundred_disks_collide_without_penetration_and_with_the_
 fn gpu_candidate_buffer_grows_and_the_run_is_unchanged() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let text = asset_path("stress/striker_plate_gpu_energy.toml")
+    let text = asset("stress/striker_plate_gpu_energy.toml")
         .replace("end_time = 3.2e-6", "end_time = 1.0e-6");
     assert!(text.contains("end_time = 1.0e-6"));
     let (r, _, u, grows) = run_gpu_with(&ctx, &text, "grow-default", ContactOptions::default());
@@ -859,6 +816,5 @@ fn gpu_candidate_buffer_grows_and_the_run_is_unchanged() {
     println!("candidate buffer: {grows} grows from the default, {grows_small} from 8 words");
     assert_eq!(grows, 0);
     assert!(grows_small > 0, "a buffer of 8 candidates must grow");
-    assert_eq!(history_bits(&r), history_bits(&rs));
-    assert_eq!(displacement_bits(&u), displacement_bits(&us));
+    assert_same_bits((&r, &u), (&rs, &us), "the grown run differs");
 }

@@ -6,6 +6,8 @@ use ricochet::model::Model;
 use ricochet::output::summary::Summary;
 use ricochet::step::Sample;
 
+use crate::scene_text::{fixed_step_run, STEEL, STEEL_NU0};
+
 /// Steel: Young's modulus (Pa) and density (kg/m^3).
 const E_STEEL: f64 = 210e9;
 const RHO_STEEL: f64 = 7850.0;
@@ -31,21 +33,12 @@ pub fn rod_scene(
     let h = L / n as f64;
     let t = A / h;
     let dt = 0.9 * h / bar_speed();
-    let end = end_factor * 2.0 * L / bar_speed();
+    let run = fixed_step_run(end_factor * 2.0 * L / bar_speed(), dt);
     let mut s = format!(
         r#"
-[run]
-end_time = {end:e}
-time_step = {dt:e}
-history_interval = {dt:e}
-bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
+{run}
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.0
+{STEEL_NU0}
 
 [[body]]
 name = "striker"
@@ -148,12 +141,7 @@ end_time = {end:e}
 history_interval = {dt:e}
 bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{STEEL}
 
 [[body]]
 name = "square"
@@ -256,6 +244,25 @@ pub fn penalty_scale_for(n: usize, omega_dt: f64) -> f64 {
     let m_node = RHO_STEEL * h * h * t / 4.0;
     let omega = omega_dt / dt;
     omega * omega * m_node / (E_STEEL * t / 2.0)
+}
+
+/// The identical rods of [`rod_scene`] (`n` cells each, run for twice the wave's round trip)
+/// with penalty contact at omega dt = 0.3: the penalty scale and the scene.
+pub fn penalty_rods(n: usize) -> (f64, String) {
+    let s = penalty_scale_for(n, 0.3);
+    let text = rod_scene(
+        n,
+        Some(1.0),
+        "penalty",
+        &format!("penalty_scale = {s:e}"),
+        2.0,
+    );
+    (s, text)
+}
+
+/// The restitution of two rods' impact at the history row `row`: (v2 - v1) / V0.
+pub fn restitution(row: &Sample) -> f64 {
+    (row.body_velocity[1][0] - row.body_velocity[0][0]) / V0
 }
 
 /// Identical rods at n = 20 with penalty contact at omega dt = 0.3 (s = 1/18, as the rods

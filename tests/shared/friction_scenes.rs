@@ -4,6 +4,8 @@
 //! penalty contact (penalty friction: the Curnier-Mroz spring): it decelerates at
 //! mu g = 294.3 m/s^2.
 
+use crate::scene_text::STEEL;
+
 /// Gravity (m/s^2).
 pub const G: f64 = 981.0;
 /// Coulomb coefficient.
@@ -33,6 +35,22 @@ pub fn block_on_block(end_time: f64, method: &str) -> String {
     )
 }
 
+/// The five sliding cases both backends run for `end_time`, named: on the floor and on the
+/// clamped block, each by Lagrange and by penalty contact, and on the floor by penalty with a
+/// tangent spring a quarter as stiff (`friction_stiffness = 0.25`).
+pub fn sliding_cases(end_time: f64) -> [(&'static str, String); 5] {
+    [
+        ("floor", block_on_floor(end_time, "lagrange")),
+        ("block", block_on_block(end_time, "lagrange")),
+        ("floor, penalty", block_on_floor(end_time, "penalty")),
+        ("block, penalty", block_on_block(end_time, "penalty")),
+        (
+            "floor, penalty, softer tangent",
+            block_on_floor(end_time, "penalty") + "friction_stiffness = 0.25\n",
+        ),
+    ]
+}
+
 fn header(end_time: f64) -> String {
     format!(
         r#"[run]
@@ -40,12 +58,7 @@ end_time = {end_time:e}
 history_interval = 2.0e-5
 gravity = [0.0, {g:e}]
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{STEEL}
 
 [[body]]
 name = "block"

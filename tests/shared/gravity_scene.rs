@@ -2,6 +2,8 @@
 //! strain) under g = 981 m/s^2 (REFERENCES.md section 7's block), falling freely or resting on
 //! a rigid wall at y = 0.
 
+use crate::scene_text::STEEL;
+
 /// Gravity (m/s^2, along -y).
 pub const G: f64 = 981.0;
 
@@ -27,12 +29,7 @@ end_time = {end_time:e}
 gravity = [0.0, {g:e}]
 bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{STEEL}
 
 [[body]]
 name = "block"

@@ -7,6 +7,8 @@
 //! the difference. A trapezoid (top edge from x = 0 to 0.6) puts its weight off the base's centre;
 //! a rectangle does not (both methods then give the same uniform penetration).
 
+use crate::scene_text::STEEL;
+
 /// Gravity (m/s^2, along -y).
 pub const G: f64 = 981.0;
 
@@ -26,12 +28,7 @@ mass_damping = 3.0e3
 gravity = [0.0, {g:e}]
 gravity_ramp = 2.0e-3
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{STEEL}
 
 [[body]]
 name = "block"

@@ -3,6 +3,7 @@
 //! (`tests/gpu/plan.rs`). A scene pays only for what it uses.
 #![allow(dead_code)]
 
+use crate::scene_text::STEEL;
 use ricochet::plan::Stage::{self, *};
 
 /// A 4 x 3 steel block, 10 x 7.5 mm, moving and squeezed; `run` is added to `[run]`, `hourglass` is
@@ -14,12 +15,7 @@ pub fn block(run: &str, hourglass: &str, tail: &str) -> String {
 end_time = 1.0e-5
 {run}
 
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.1e11
-poisson_ratio = 0.3
+{STEEL}
 
 [[body]]
 name = "block"

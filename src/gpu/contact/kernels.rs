@@ -6,8 +6,8 @@
 use std::borrow::Cow;
 
 use super::{narrow, one, report, search, solve, COMMON};
-use crate::gpu::kernels::Features;
 use crate::gpu::shader;
+use crate::gpu::shader::Features;
 
 /// The contact shader modules: each one's label and stage files (after contact_common.wgsl).
 pub const MODULES: [(&str, &[&str]); 5] = [
@@ -101,7 +101,7 @@ macro_rules! stage_kernels {
             pub(crate) fn new(
                 device: &wgpu::Device,
                 layouts: &$crate::gpu::contact::kernels::Layouts,
-                features: $crate::gpu::kernels::Features,
+                features: $crate::gpu::shader::Features,
             ) -> Self {
                 let m = $crate::gpu::contact::kernels::module(device, MODULE, features);
                 $name {

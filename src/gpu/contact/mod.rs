@@ -43,7 +43,7 @@ use crate::contact::ContactSet;
 use crate::error::{Error, Result};
 use crate::model::Model;
 
-use super::state::Alloc;
+use super::alloc::Alloc;
 use tables::{GpuSegment, GpuSlot};
 
 /// Shared WGSL declarations of the contact kernels.

@@ -9,8 +9,8 @@
 use super::kernels::{module, pipeline, Layouts};
 use super::search::SearchKernels;
 use super::{narrow, report, solve, Dispatch};
-use crate::gpu::kernels::Features;
 use crate::gpu::reduce::TREE;
+use crate::gpu::shader::Features;
 
 /// WGSL source (compiled after [`super::narrow::SOURCE`], [`super::solve::SOURCE`], the sum tree
 /// ([`TREE`]) and [`super::report::SOURCE`]).

@@ -8,7 +8,7 @@
 
 use super::kernels::{module, pipeline, Layouts};
 use super::{groups, Dispatch};
-use crate::gpu::kernels::Features;
+use crate::gpu::shader::Features;
 
 /// WGSL source.
 pub const SOURCE: &str = include_str!("../../../shaders/contact_search.wgsl");

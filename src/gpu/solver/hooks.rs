@@ -1,7 +1,7 @@
 //! Test hooks of the GPU solver: the contact search's candidates and active slots read back
 //! from the device (checked against the CPU reference's broad phase, `crate::contact::broad`, in
 //! `tests/gpu/general.rs`), the grow events, and the element stage run alone on given nodes
-//! (against [`crate::step::element::evaluate`] in `tests/gpu.rs`).
+//! (against [`crate::element::evaluate`] in `tests/gpu.rs`).
 
 use crate::error::{Error, Result};
 

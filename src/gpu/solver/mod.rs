@@ -18,27 +18,25 @@ pub use profile::PROFILE_PARTS;
 use std::sync::Arc;
 use std::time::Instant;
 
+use crate::element::plastic::PlasticState;
 use crate::error::{Error, Result};
 use crate::model::Model;
 use crate::plan::{Plan, Stage};
 use crate::step::cpu::CpuSolver;
-use crate::step::plastic::PlasticState;
 use crate::step::{Counters, Event, Schedule, Solver};
 
 use super::contact::{ContactCounters, ContactOptions};
 use super::context::GpuContext;
 use super::kernels::{Features, Kernels};
 use super::layout::*;
-use super::state::GpuState;
+use super::state::{GpuState, MAX_BATCH};
 use failure::Names;
 
 /// One 2-vector per node.
 pub type NodalField = Vec<[f64; 2]>;
 
-/// Fewest steps recorded per submission.
+/// Fewest steps recorded per submission (the most: [`MAX_BATCH`]).
 pub const MIN_BATCH: u32 = 32;
-/// Most steps recorded per submission.
-pub const MAX_BATCH: u32 = 1024;
 
 /// Explicit central-difference integration on the GPU (f32).
 #[derive(Debug)]

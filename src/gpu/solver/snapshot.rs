@@ -2,8 +2,8 @@
 //! (displacements, velocities at t_n, the plastic state), and on demand (the nodes now). The CPU
 //! reference takes the same snapshots from its own arrays ([`crate::step::cpu::CpuSolver`]).
 
+use crate::element::plastic::PlasticState;
 use crate::error::{Error, Result};
-use crate::step::plastic::PlasticState;
 use crate::step::Snapshot;
 
 use super::{GpuSolver, NodalField};

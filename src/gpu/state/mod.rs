@@ -1,16 +1,13 @@
 //! Device-resident simulation state: the buffers a scene needs (and no others), allocated once in
 //! a fixed order, and the bind groups built once on them. By file: this one sizes and allocates
-//! the buffers ([`GpuState::new`]); `alloc.rs` records them for the plan report and checkpoints,
-//! `binds.rs` builds each kernel's bind group, `record.rs` records a step as labelled dispatches
+//! the buffers ([`GpuState::new`]) through `src/gpu/alloc.rs` (which records them for the plan
+//! report and checkpoints); `binds.rs` builds each kernel's bind group, `record.rs` records a step as labelled dispatches
 //! ([`GpuState::record_step`]). The contact stage's buffers are
 //! [`super::contact::ContactState`]'s. The CPU reference keeps the same state in host arrays
 //! ([`crate::step::cpu::CpuSolver`]).
 
-mod alloc;
 mod binds;
 mod record;
-
-pub(crate) use alloc::Alloc;
 
 use crate::contact::ContactSet;
 use crate::error::{Error, Result};
@@ -18,6 +15,7 @@ use crate::model::Model;
 use crate::plan::{Plan, Stage};
 use crate::step::Schedule;
 
+use super::alloc::Alloc;
 use super::contact::{ContactState, Shared};
 use super::kernels::Kernels;
 use super::layout::*;
@@ -43,16 +41,20 @@ pub const FUSED_INSTANCES: usize = 1 << 11;
 /// instance beyond): the dispatch limit per dimension.
 pub const MAX_INST_GROUPS: u32 = 65535;
 
+/// Most steps recorded per submission (the solver's batches; the history ring holds at least
+/// this many rows).
+pub const MAX_BATCH: u32 = 1024;
+
 /// Rows the history ring holds between readbacks, at most (fewer when a row is so wide, with many
 /// bodies, that the ring would exceed the device's largest storage binding; never fewer than the
-/// steps of one submission, [`super::solver::MAX_BATCH`]).
+/// steps of one submission, [`MAX_BATCH`]).
 pub const ROW_CAPACITY: u32 = 4096;
 
 /// The history ring's rows for rows of `stride` words on a device whose largest storage binding
 /// is `max_binding` bytes.
 pub fn row_capacity(stride: u32, max_binding: u64) -> u32 {
     let fit = max_binding / (4 * stride.max(1) as u64);
-    (fit.min(ROW_CAPACITY as u64) as u32).max(super::solver::MAX_BATCH)
+    (fit.min(ROW_CAPACITY as u64) as u32).max(MAX_BATCH)
 }
 
 /// Buffers and bind groups of one scene on the device.

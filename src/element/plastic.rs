@@ -1,4 +1,5 @@
-//! J2 (von Mises) plasticity at finite strain, CPU reference.
+//! J2 (von Mises) plasticity at finite strain, CPU reference (the GPU twin is the J2 branch of
+//! `shaders/element.wgsl`).
 //!
 //! The model is hyperelastic-multiplicative (F = F_e F_p), not hypoelastic: the elastic response
 //! is Hencky's (stored energy W = K/2 (ln J)^2 + mu |dev ln V_e|^2, V_e the elastic left stretch)
@@ -24,7 +25,7 @@
 //! elastic volume change, 1 % at 1 % uniaxial strain); with linear hardening the return is still
 //! one closed-form step: d alpha = (tau_vm - J (sigma_y + H alpha)) / (3 mu + J H).
 
-use super::element::ElementParams;
+use super::params::ElementParams;
 
 /// Plastic state of one element: C_p^-1 (xx, yy, xy, zz) and the equivalent plastic strain.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]

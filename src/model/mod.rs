@@ -1,19 +1,24 @@
-//! The model: a scene turned into flat arrays (nodes, elements, bodies, constraints).
+//! The model: a scene turned into flat arrays (nodes, elements, bodies, constraints), and the
+//! boundary of each body ([`surface`]), on which pressure loads and contacts act.
 //!
 //! Reference coordinates are kept apart from displacements: every element stores its corners
-//! relative to its own centre, so that f32 keeps full precision far from the origin.
+//! relative to its own centre, so that f32 keeps full precision far from the origin. The GPU
+//! solver uploads these arrays as they are (in f32, [`crate::gpu::state`]).
+
+pub mod surface;
 
 use std::ops::Range;
 
-use crate::contact::surface::Surface;
-use crate::contact::Overlap;
+use crate::element::plastic::PlasticState;
+use crate::element::{evaluate_state, evaluate_with, Dissipation, ElementOut, ElementParams};
 use crate::error::Result;
+use crate::geometry::{
+    element_centre, is_triangle, is_triangle_geometry, lumped_mass, lumped_mass_axisymmetric,
+    min_corner_ratio, quad_geometry, QuadGeometry,
+};
 use crate::mesh::Mesh;
 use crate::scene::{self, Scene};
-use crate::step::element::{
-    element_centre, is_triangle, is_triangle_geometry, min_corner_ratio, quad_geometry,
-    ElementParams, QuadGeometry,
-};
+use surface::Surface;
 
 /// One body's slice of the model.
 #[derive(Debug, Clone)]
@@ -100,6 +105,23 @@ impl PressureLoad {
     }
 }
 
+/// A slave node behind a master surface or a wall at t = 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Overlap {
+    /// Contact or wall name.
+    pub interface: String,
+    /// Global node index.
+    pub node: u32,
+    /// Penetration depth (m).
+    pub depth: f64,
+    /// Unit normal of the surface it is behind (moving the node by `depth` along it removes it).
+    pub normal: [f64; 2],
+    /// The contact pass that found it (`None` for a wall).
+    pub pass: Option<usize>,
+    /// The bodies of the node and of the surface it is behind (`None` for a wall).
+    pub bodies: Option<[u32; 2]>,
+}
+
 /// The whole model as flat arrays.
 #[derive(Debug, Clone)]
 pub struct Model {
@@ -116,7 +138,8 @@ pub struct Model {
     /// Reference radius (x) of each element's centre, for axisymmetric bodies (empty when the
     /// model has none; 0 for the elements of other bodies).
     pub radius: Vec<f64>,
-    /// Slave nodes that started behind a contact surface or wall and were moved onto it.
+    /// Slave nodes that started behind a contact surface or wall and were moved onto it
+    /// ([`crate::contact::overlap::resolve`]).
     pub initial_overlaps: Vec<Overlap>,
     /// Body of each element.
     pub element_body: Vec<u32>,
@@ -513,6 +536,16 @@ impl Model {
         self.quads.len()
     }
 
+    /// The names of the contacts, then of the rigid walls: the interfaces in the order of the
+    /// history's contact columns.
+    pub fn interface_names(&self) -> Vec<String> {
+        self.contacts
+            .iter()
+            .map(|c| c.name.clone())
+            .chain(self.walls.iter().map(|w| w.name.clone()))
+            .collect()
+    }
+
     /// Whether the model has any contact or rigid wall.
     pub fn has_contact(&self) -> bool {
         !self.contacts.is_empty() || !self.walls.is_empty()
@@ -543,11 +576,25 @@ impl Model {
         }
     }
 
+    /// Element `e` evaluated at rest at the nodal displacements `u` (no velocity, no step before)
+    /// from the plastic state `plastic`: its static forces and stress.
+    pub fn element_at(&self, e: usize, u: &[[f64; 2]], plastic: &PlasticState) -> ElementOut {
+        evaluate_state(
+            self.params(e),
+            &self.geometry(e),
+            &self.corners[e],
+            &self.quads[e].map(|i| u[i as usize]),
+            &[[0.0; 2]; 4],
+            &Dissipation::default(),
+            0.0,
+            plastic,
+        )
+    }
+
     /// The elements' stable step at t = 0 (undeformed, at the initial velocities; without the
     /// safety factor) and the element that sets it; a NaN step (a degenerate element) is kept
     /// as the answer.
     pub fn initial_stable_step(&self) -> (f64, usize) {
-        use crate::step::element::{evaluate_with, Dissipation};
         let mut best = (f64::INFINITY, 0);
         for e in 0..self.element_count() {
             let q = self.quads[e];
@@ -597,98 +644,5 @@ impl Model {
         self.bodies
             .iter()
             .any(|b| b.params.model == crate::scene::MaterialModel::J2Plastic)
-    }
-}
-
-/// Row-sum lumped masses per radian of an axisymmetric bilinear quad: `rho * integral of N_a r`
-/// by 2x2 Gauss quadrature, r = `x0` + x (`x` relative to the mesh origin `x0`).
-pub fn lumped_mass_axisymmetric(x: &[[f64; 2]; 4], rho: f64, x0: f64) -> [f64; 4] {
-    lumped_mass_weighted(x, rho, Some(x0))
-}
-
-/// Row-sum lumped masses of a bilinear quad: `rho_t * integral of N_a`, by 2x2 Gauss quadrature;
-/// of a triangle (collapsed quad, see [`crate::step::element`]): `rho_t A / 3` on its three
-/// nodes (the repeated corner gets 0).
-pub fn lumped_mass(x: &[[f64; 2]; 4], rho_t: f64) -> [f64; 4] {
-    lumped_mass_weighted(x, rho_t, None)
-}
-
-fn lumped_mass_weighted(x: &[[f64; 2]; 4], rho_t: f64, x0: Option<f64>) -> [f64; 4] {
-    if is_triangle_geometry(x) {
-        // Triangle: rho_t integral of N_a = rho_t A / 3; axisymmetric, with r = sum N_b r_b and
-        // integral of N_a N_b = A (1 + delta_ab) / 12: rho A (2 r_a + r_b + r_c) / 12.
-        let area = 0.5
-            * ((x[1][0] - x[0][0]) * (x[2][1] - x[0][1])
-                - (x[2][0] - x[0][0]) * (x[1][1] - x[0][1]));
-        let m: [f64; 3] = match x0 {
-            None => [rho_t * area / 3.0; 3],
-            Some(x0) => {
-                let r = [x0 + x[0][0], x0 + x[1][0], x0 + x[2][0]];
-                let sum = r[0] + r[1] + r[2];
-                r.map(|ra| rho_t * area * (ra + sum) / 12.0)
-            }
-        };
-        return [m[0], m[1], m[2], 0.0];
-    }
-    let g = 1.0 / 3f64.sqrt();
-    let mut m = [0.0; 4];
-    let xi_a = [-1.0, 1.0, 1.0, -1.0];
-    let eta_a = [-1.0, -1.0, 1.0, 1.0];
-    for (xi, eta) in [(-g, -g), (g, -g), (g, g), (-g, g)] {
-        // Jacobian of the bilinear map.
-        let mut j = [0.0; 4];
-        for a in 0..4 {
-            let dxi = 0.25 * xi_a[a] * (1.0 + eta_a[a] * eta);
-            let deta = 0.25 * eta_a[a] * (1.0 + xi_a[a] * xi);
-            j[0] += dxi * x[a][0];
-            j[1] += deta * x[a][0];
-            j[2] += dxi * x[a][1];
-            j[3] += deta * x[a][1];
-        }
-        let det = j[0] * j[3] - j[1] * j[2];
-        let n: [f64; 4] =
-            std::array::from_fn(|a| 0.25 * (1.0 + xi_a[a] * xi) * (1.0 + eta_a[a] * eta));
-        let r = match x0 {
-            Some(x0) => x0 + (0..4).map(|a| n[a] * x[a][0]).sum::<f64>(),
-            None => 1.0,
-        };
-        for a in 0..4 {
-            m[a] += rho_t * n[a] * det * r;
-        }
-    }
-    m
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn lumped_mass_sums_to_element_mass() {
-        let x = [[0.0, 0.0], [2.0, 0.1], [2.3, 1.7], [-0.2, 1.1]];
-        let m = lumped_mass(&x, 3.0);
-        let area = quad_geometry(&x).area;
-        let total: f64 = m.iter().sum();
-        assert!((total - 3.0 * area).abs() < 1e-12 * total);
-        assert!(m.iter().all(|&w| w > 0.0));
-    }
-    #[test]
-    fn lumped_mass_of_a_triangle_is_a_third_each_and_its_axisymmetric_mass_is_exact() {
-        let t = [[0.3, 0.1], [1.2, 0.4], [0.5, 1.1]];
-        let x = [t[0], t[1], t[2], t[2]];
-        let area = quad_geometry(&x).area;
-        let m = lumped_mass(&x, 3.0);
-        assert_eq!(m[3], 0.0);
-        for w in &m[..3] {
-            assert!((w - area).abs() < 1e-15, "{w} vs {}", area);
-        }
-        // Per radian: rho times the integral of r over the triangle, A (r_a + r_b + r_c) / 3,
-        // with the origin at x0 = 0.7.
-        let m = lumped_mass_axisymmetric(&x, 2.0, 0.7);
-        let total: f64 = m.iter().sum();
-        let exact = 2.0 * area * (2.1 + t[0][0] + t[1][0] + t[2][0]) / 3.0;
-        assert!((total - exact).abs() < 1e-14 * exact, "{total} vs {exact}");
-        // The node farther from the axis carries more.
-        assert!(m[1] > m[2] && m[2] > m[0]);
     }
 }

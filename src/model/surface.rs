@@ -1,7 +1,9 @@
-//! Contact surfaces: the boundary edges of a body's mesh, with outward normals, and its
-//! boundary nodes.
+//! Body surfaces: the boundary edges of a body's mesh, with outward normals, and its boundary
+//! nodes, on which the pressure loads act ([`super::PressureLoad`]) and the contacts are built
+//! ([`crate::contact`]). Computed once on the CPU; the GPU kernels receive the result as the
+//! pressure loads' nodal forces and the contact tables ([`crate::contact::Tables`]).
 
-use crate::model::Model;
+use super::Model;
 
 /// A boundary edge of a body, oriented so that the body lies on its left (the counter-clockwise
 /// order of its quad): the outward normal of `a -> b` is `(t_y, -t_x) / |t|` with `t = b - a`.

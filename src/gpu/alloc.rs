@@ -1,5 +1,7 @@
-//! Allocation of a scene's device buffers: each recorded by name and size for the plan report,
-//! and kept in allocation order for checkpoints (`src/gpu/checkpoint.rs`).
+//! The device buffers of a scene as they are allocated ([`Alloc`]): each one created once, named,
+//! its size listed for the plan report ([`super::state::GpuState::allocated`]) and the buffer
+//! kept in allocation order for checkpoints (`src/gpu/checkpoint.rs`). Host-side bookkeeping of
+//! the GPU state and its contact buffers: no kernel, so no CPU twin.
 
 use wgpu::util::DeviceExt;
 

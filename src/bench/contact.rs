@@ -1,0 +1,413 @@
+//! The contact bench (the second table): a [`ContactScene`] of a chosen size timed with and
+//! without its `[[contact]]` (and with friction when asked) on the CPU reference
+//! ([`cpu_contact`]), the GPU ([`gpu_contact`]) or both in the same rounds ([`both_contact`]).
+
+use std::path::Path;
+use std::sync::Arc;
+
+use super::scenes::{bench_schedule, build, with_friction, ContactScene, PileContact};
+use super::table::{solver_adapter, ContactRow};
+use super::timing::{alternate, median, per_round, stopped, timed_steps, Timed};
+use crate::error::{Error, Result};
+use crate::gpu::{GpuContext, GpuSolver};
+use crate::model::Model;
+use crate::plan::Plan;
+use crate::scene::Scene;
+use crate::step::cpu::CpuSolver;
+
+/// How a contact scene is timed ([`cpu_contact`], [`gpu_contact`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactTiming {
+    /// Steps timed of each variant, split over `rounds` rounds in alternation.
+    pub steps: u64,
+    /// Rounds (medians reported).
+    pub rounds: u32,
+    /// Steps each variant runs before the timed ones (at least 2: the first search): the pile's
+    /// disks reach the wall after about 440 steps, its bottom row all touches by 600.
+    pub warmup: u64,
+    /// How the pile puts its disks in contact.
+    pub pile: PileContact,
+    /// A Coulomb coefficient for a third variant with friction on every contact and wall.
+    pub friction: Option<f64>,
+    /// Plain projected Gauss-Seidel sweeps instead of the extrapolated ones, on both backends
+    /// ([`crate::contact::extrapolation`]): a comparison.
+    pub plain_sweeps: bool,
+}
+
+/// Warm-up steps of a contact row unless asked for more: two, the first search included.
+pub const DEFAULT_WARMUP: u64 = 2;
+
+/// One backend's solvers of a contact scene, as [`contact_rows`] times them: with and without
+/// the scene's `[[contact]]`, and with friction when asked.
+struct Side<'a> {
+    backend: &'static str,
+    adapter: String,
+    with: &'a mut dyn Timed,
+    without: &'a mut dyn Timed,
+    friction: Option<&'a mut dyn Timed>,
+}
+
+impl Side<'_> {
+    fn variants(&mut self) -> Vec<(&'static str, &mut dyn Timed)> {
+        let mut v: Vec<(&'static str, &mut dyn Timed)> =
+            vec![("contact", &mut *self.with), ("free", &mut *self.without)];
+        if let Some(f) = self.friction.as_mut() {
+            v.push(("friction", &mut **f));
+        }
+        v
+    }
+}
+
+/// Times the solvers of every side of a contact scene (each with and without its contact, and
+/// with friction when asked) in alternating rounds, all sides in the same rounds (after
+/// `timing.warmup` warm-up steps each, at least 2: the first search included), and fills a row
+/// per side. The sides after a first `"cpu"` side get [`ContactRow::vs_cpu`].
+fn contact_rows(
+    which: ContactScene,
+    size: usize,
+    model: &Model,
+    mut sides: Vec<Side<'_>>,
+    timing: &ContactTiming,
+) -> Result<Vec<ContactRow>> {
+    let rounds = timing.rounds.max(1);
+    let per = per_round(timing.steps, rounds);
+    let warmup = timing.warmup.max(DEFAULT_WARMUP);
+    for side in &mut sides {
+        let backend = side.backend;
+        for (what, s) in side.variants() {
+            let taken = s.take(warmup)?;
+            if taken < warmup {
+                return Err(stopped(
+                    &format!("{backend} {} {what} warm-up", which.name()),
+                    taken,
+                    warmup,
+                ));
+            }
+        }
+    }
+    let before: Vec<_> = sides.iter().map(|s| s.with.count()).collect();
+    let cpu_first = sides.first().is_some_and(|s| s.backend == "cpu");
+    let meta: Vec<(&'static str, String)> = sides
+        .iter()
+        .map(|s| (s.backend, s.adapter.clone()))
+        .collect();
+    // Every variant of every side, in one alternation.
+    let mut runs: Vec<Box<dyn FnMut() -> Result<f64> + '_>> = Vec::new();
+    let mut counts = Vec::new();
+    for side in &mut sides {
+        let backend = side.backend;
+        let variants = side.variants();
+        counts.push(variants.len());
+        for (what, s) in variants {
+            let name = format!("{backend} {} {what}", which.name());
+            runs.push(Box::new(move || timed_steps(s, per, &name)));
+        }
+    }
+    let mut refs: Vec<&mut dyn FnMut() -> Result<f64>> =
+        runs.iter_mut().map(|r| &mut **r as _).collect();
+    let times = alternate(rounds, &mut refs)?;
+    drop(refs);
+    drop(runs);
+    let total = per * u64::from(rounds);
+    let mut rows = Vec::new();
+    let mut at = 0;
+    for (k, side) in sides.iter().enumerate() {
+        let t = &times[at..at + counts[k]];
+        at += counts[k];
+        let after = side.with.count();
+        let wall: f64 = t[0].iter().sum();
+        let (friction_steps_per_second, friction_us_per_step) = match t.get(2) {
+            Some(tf) => (
+                Some(total as f64 / tf.iter().sum::<f64>()),
+                Some(median(
+                    tf.iter()
+                        .zip(&t[0])
+                        .map(|(f, c)| 1e6 * (f - c) / per as f64)
+                        .collect(),
+                )),
+            ),
+            None => (None, None),
+        };
+        let vs_cpu = (cpu_first && k > 0)
+            .then(|| median(times[0].iter().zip(&t[0]).map(|(c, g)| c / g).collect()));
+        let searches = after.contact_searches - before[k].contact_searches;
+        rows.push(ContactRow {
+            scene: which,
+            backend: meta[k].0.to_string(),
+            adapter: meta[k].1.clone(),
+            size,
+            elements: model.element_count(),
+            bodies: model.bodies.len(),
+            steps: total,
+            rounds,
+            warmup,
+            plain_sweeps: timing.plain_sweeps,
+            wall_seconds: wall,
+            steps_per_second: total as f64 / wall,
+            free_seconds: t[1].iter().sum(),
+            contact_share: median(t[0].iter().zip(&t[1]).map(|(c, f)| (c - f) / c).collect()),
+            friction: timing.friction,
+            friction_steps_per_second,
+            friction_us_per_step,
+            sweeps_mean: after.contact_sweeps_mean,
+            friction_sweeps_mean: side
+                .friction
+                .as_ref()
+                .map(|f| f.count().contact_sweeps_mean),
+            searches,
+            searches_per_100_steps: 100.0 * searches as f64 / total as f64,
+            bytes_read_back_per_step: (after.bytes_read_back - before[k].bytes_read_back) as f64
+                / total as f64,
+            vs_cpu,
+        });
+    }
+    Ok(rows)
+}
+
+/// Builds the model, plan and schedule of a contact scene variant (`friction`: the Coulomb
+/// coefficient put on its contacts and walls, see [`with_friction`]).
+fn contact_build(
+    which: ContactScene,
+    size: usize,
+    contact: bool,
+    pile: PileContact,
+    friction: Option<f64>,
+) -> Result<(Model, Plan, crate::step::Schedule)> {
+    let mut text = which.text(size, contact, pile);
+    if let Some(mu) = friction {
+        text = with_friction(&text, mu);
+    }
+    let name = format!("bench_{}.toml", which.name());
+    let scene = Scene::parse(&text, Path::new(&name))?;
+    let (model, plan) = build(&scene)?;
+    Ok((model, plan, bench_schedule(&scene)))
+}
+
+/// The solvers of a contact scene on one backend: with and without its `[[contact]]`, and with
+/// friction when `timing.friction` asks; and the model with contact.
+type Solvers<S> = (Model, S, S, Option<S>);
+
+fn cpu_solvers(
+    which: ContactScene,
+    size: usize,
+    timing: &ContactTiming,
+) -> Result<Solvers<CpuSolver>> {
+    let pile = timing.pile;
+    let plain = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
+        let mut solver = CpuSolver::new(m, p, s);
+        if let Some(c) = solver.contact_mut() {
+            c.set_plain_sweeps(timing.plain_sweeps);
+        }
+        solver
+    };
+    let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
+    let with = plain((model.clone(), plan, schedule));
+    let without = plain(contact_build(which, size, false, pile, None)?);
+    let rough = match timing.friction {
+        Some(mu) => Some(plain(contact_build(which, size, true, pile, Some(mu))?)),
+        None => None,
+    };
+    Ok((model, with, without, rough))
+}
+
+fn gpu_solvers(
+    ctx: &Arc<GpuContext>,
+    which: ContactScene,
+    size: usize,
+    timing: &ContactTiming,
+) -> Result<Solvers<GpuSolver>> {
+    let pile = timing.pile;
+    let options = crate::gpu::contact::ContactOptions {
+        plain_sweeps: timing.plain_sweeps,
+        ..Default::default()
+    };
+    let solver = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
+        GpuSolver::with_options(ctx.clone(), &m, &p, s, None, options)
+    };
+    let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
+    let with = solver((model.clone(), plan, schedule))?;
+    let without = solver(contact_build(which, size, false, pile, None)?)?;
+    let rough = match timing.friction {
+        Some(mu) => Some(solver(contact_build(which, size, true, pile, Some(mu))?)?),
+        None => None,
+    };
+    Ok((model, with, without, rough))
+}
+
+/// The model with contact of `solvers`, and the side of `backend` on `adapter` that times them.
+fn side<'a, S: Timed>(
+    backend: &'static str,
+    adapter: String,
+    (model, with, without, rough): &'a mut Solvers<S>,
+) -> (&'a Model, Side<'a>) {
+    let side = Side {
+        backend,
+        adapter,
+        with,
+        without,
+        friction: rough.as_mut().map(|s| s as &mut dyn Timed),
+    };
+    (model, side)
+}
+
+/// The row of one backend's side of a contact scene, timed alone.
+fn alone(
+    which: ContactScene,
+    size: usize,
+    (model, side): (&Model, Side<'_>),
+    timing: &ContactTiming,
+) -> Result<ContactRow> {
+    contact_rows(which, size, model, vec![side], timing)?
+        .pop()
+        .ok_or_else(|| Error::Bench("a contact scene gave no row".into()))
+}
+
+/// Times the CPU reference on a contact scene of `size`: `rounds` rounds of `steps / rounds`
+/// steps with and without the scene's `[[contact]]`, alternating; with `friction`, also the
+/// scene with that Coulomb coefficient on its contacts and walls (a third variant).
+///
+/// # Errors
+/// Scene errors, or [`Error::Bench`] when a run stops before it took all its steps.
+pub fn cpu_contact(which: ContactScene, size: usize, timing: &ContactTiming) -> Result<ContactRow> {
+    let mut cpu = cpu_solvers(which, size, timing)?;
+    alone(which, size, side("cpu", solver_adapter(), &mut cpu), timing)
+}
+
+/// Times the GPU of `ctx` on a contact scene of `size`, as [`cpu_contact`] (with
+/// [`GpuSolver::run_steps`], the host searches the contact kernel asks for included).
+///
+/// # Errors
+/// Scene or device errors (the GPU backend limits the number of bodies), or [`Error::Bench`]
+/// when a run stops before it took all its steps.
+pub fn gpu_contact(
+    ctx: Arc<GpuContext>,
+    which: ContactScene,
+    size: usize,
+    timing: &ContactTiming,
+) -> Result<ContactRow> {
+    let mut gpu = gpu_solvers(&ctx, which, size, timing)?;
+    alone(
+        which,
+        size,
+        side("gpu", ctx.adapter_name(), &mut gpu),
+        timing,
+    )
+}
+
+/// Times the CPU reference and the GPU of `ctx` on a contact scene of `size` in the same
+/// alternating rounds (every variant of both, the order reversed every other round), so that
+/// the GPU row's [`ContactRow::vs_cpu`] compares the two under the same drift of the machine's
+/// speed; the CPU's row, then the GPU's.
+///
+/// # Errors
+/// As [`cpu_contact`] and [`gpu_contact`].
+pub fn both_contact(
+    ctx: Arc<GpuContext>,
+    which: ContactScene,
+    size: usize,
+    timing: &ContactTiming,
+) -> Result<Vec<ContactRow>> {
+    let mut gpu = gpu_solvers(&ctx, which, size, timing)?;
+    let mut cpu = cpu_solvers(which, size, timing)?;
+    let (model, cpu) = side("cpu", solver_adapter(), &mut cpu);
+    let (_, gpu) = side("gpu", ctx.adapter_name(), &mut gpu);
+    contact_rows(which, size, model, vec![cpu, gpu], timing)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::{contact_table, pile_text};
+
+    fn timing(steps: u64, rounds: u32, pile: PileContact, friction: Option<f64>) -> ContactTiming {
+        ContactTiming {
+            steps,
+            rounds,
+            warmup: DEFAULT_WARMUP,
+            pile,
+            friction,
+            plain_sweeps: false,
+        }
+    }
+
+    /// `warmup` runs each variant of a contact scene that many steps before the timed ones: the
+    /// pile's disks (half a millimetre above the wall at 20 m/s, about 440 steps) are in contact
+    /// in the timed steps after 600 of them, and not after the default 2.
+    #[test]
+    fn contact_rows_warm_up_into_contact_when_asked() {
+        let cold = timing(20, 2, PileContact::All, None);
+        let warm = ContactTiming {
+            warmup: 600,
+            ..cold
+        };
+        let cold = cpu_contact(ContactScene::Pile, 2, &cold).expect("bench row");
+        let warm = cpu_contact(ContactScene::Pile, 2, &warm).expect("bench row");
+        assert_eq!((cold.warmup, warm.warmup), (DEFAULT_WARMUP, 600));
+        assert_eq!((warm.steps, warm.rounds), (20, 2));
+        assert_eq!(cold.sweeps_mean, 0.0, "no contact in the first 22 steps");
+        assert!(
+            warm.sweeps_mean > 0.0,
+            "the disks touch the wall after 600 steps"
+        );
+    }
+
+    /// `plain_sweeps` reaches the CPU reference's solver: the striker's two-pass constraints take
+    /// more sweeps a step plain than extrapolated, and the row says which it timed.
+    #[test]
+    fn plain_sweeps_reach_the_solver_and_the_row() {
+        let extra = timing(40, 2, PileContact::All, None);
+        let plain = ContactTiming {
+            plain_sweeps: true,
+            ..extra
+        };
+        let e = cpu_contact(ContactScene::Striker, 12, &extra).expect("bench row");
+        let p = cpu_contact(ContactScene::Striker, 12, &plain).expect("bench row");
+        assert_eq!((e.plain_sweeps, p.plain_sweeps), (false, true));
+        assert!(e.sweeps_mean > 0.0, "the striker is in contact");
+        assert!(
+            p.sweeps_mean > e.sweeps_mean,
+            "{} plain against {} extrapolated",
+            p.sweeps_mean,
+            e.sweeps_mean
+        );
+        assert!(contact_table(&[p]).contains("plain projected Gauss-Seidel"));
+    }
+
+    #[test]
+    fn contact_rows_on_the_cpu_take_their_steps() {
+        let row = cpu_contact(
+            ContactScene::Striker,
+            4,
+            &timing(4, 2, PileContact::Pairs, None),
+        )
+        .expect("row");
+        assert_eq!((row.steps, row.elements, row.bodies), (4, 96, 2));
+        assert!(row.steps_per_second > 0.0 && row.bytes_read_back_per_step == 0.0);
+        assert!(row.friction_us_per_step.is_none());
+        let table = contact_table(&[row]);
+        assert!(table.contains("striker") && !table.contains("friction"));
+    }
+
+    #[test]
+    fn friction_rows_time_a_third_variant_with_friction_on_every_contact() {
+        let text = with_friction(&pile_text(2, Some(PileContact::All)), 0.3);
+        assert_eq!(
+            text.matches("friction = 0.3\n").count(),
+            2,
+            "the wall and the pile"
+        );
+        let scene = Scene::parse(&text, Path::new("pile.toml")).expect("parses");
+        assert!(scene.contacts.iter().all(|c| c.friction == 0.3));
+        let row = cpu_contact(
+            ContactScene::Pair,
+            4,
+            &timing(4, 2, PileContact::All, Some(0.3)),
+        )
+        .expect("row");
+        assert_eq!(row.friction, Some(0.3));
+        assert!(row.friction_steps_per_second.is_some_and(|f| f > 0.0));
+        assert!(row.friction_us_per_step.is_some_and(f64::is_finite));
+        let table = contact_table(&[row]);
+        assert!(table.contains("friction [us/st]"));
+    }
+}

@@ -1,0 +1,242 @@
+//! The command line's arguments, as clap reads them and `ricochet --help` shows them: the
+//! commands and their options. Each command's body is in the module named for it beside this one
+//! (`run.rs`, `plot.rs`, `check.rs`, `bench.rs`, `verify.rs`).
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+/// The command line: one command.
+#[derive(Parser)]
+#[command(
+    name = "ricochet",
+    version,
+    about = "Explicit contact-impact simulation of 2D solids on the GPU"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Run a scene.
+    Run(RunArgs),
+    /// Draw a run's pictures from its output folder into OUT/plots/: energies, contact forces and
+    /// body velocities against time, and the deformed mesh filled by a field at chosen snapshots.
+    Plot(PlotArgs),
+    /// Throughput benchmark on a generated N x N block (no contact), with the full step over the
+    /// bare element-and-update loop and the cost of a contact pair, in the same run; and, with
+    /// --scene, contact scenes (pair, striker, pile) with and without their contact.
+    Bench(BenchArgs),
+    /// Validate a scene and print its plan.
+    Check(CheckArgs),
+    /// Run the verification suite (assets/verification/): error against wall time per case,
+    /// method and backend; writes results.csv, report.md and one plot per case.
+    Verify(VerifyArgs),
+}
+
+/// The options of `ricochet run`.
+#[derive(Args)]
+pub struct RunArgs {
+    /// Scene file (TOML); not with --restart, which takes the scene of the checkpoint.
+    #[arg(required_unless_present = "restart")]
+    pub scene: Option<PathBuf>,
+    /// Backend.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: Backend,
+    /// Output folder (default out/<scene name>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Override run.end_time.
+    #[arg(long)]
+    pub end_time: Option<f64>,
+    /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// Then draw the pictures of the run (as `ricochet plot OUT`).
+    #[arg(long)]
+    pub plots: bool,
+    /// Write OUT/checkpoint.bin every T seconds of simulated time (and when interrupted),
+    /// replacing the previous one; overrides run.checkpoint_interval.
+    #[arg(long, value_name = "T")]
+    pub checkpoint_interval: Option<f64>,
+    /// Continue the run whose output folder DIR holds a checkpoint.bin, into DIR, on the
+    /// checkpoint's backend (and the same scene, end time and checkpoint interval).
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["scene", "out", "end_time", "checkpoint_interval"])]
+    pub restart: Option<PathBuf>,
+}
+
+/// The options of `ricochet plot`.
+#[derive(Args)]
+pub struct PlotArgs {
+    /// The run's output folder (with history.csv, summary.json, fields.pvd).
+    pub out: PathBuf,
+    /// Field of the field pictures (default von_mises).
+    #[arg(long, value_parser = ["von_mises", "pressure", "velocity", "displacement", "plastic_strain"])]
+    pub field: Option<String>,
+    /// Snapshot times (s): the snapshot nearest each; default all, or 12 evenly spaced.
+    #[arg(long, num_args = 1.., allow_negative_numbers = true)]
+    pub times: Vec<f64>,
+    /// Colour range LO HI of the field pictures (default: the smallest and largest value over
+    /// the chosen snapshots); values outside take the end colours.
+    #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true)]
+    pub range: Option<Vec<f64>>,
+    /// Also write field_<name>.gif with the chosen snapshots as frames.
+    #[arg(long)]
+    pub animate: bool,
+    /// Picture format.
+    #[arg(long, value_enum, default_value = "png")]
+    pub format: PlotFormat,
+}
+
+/// The options of `ricochet bench`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Backend(s).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: BenchBackend,
+    /// Scenes: the block (first table) and/or the contact scenes (second table).
+    #[arg(long, value_enum, num_args = 1.., default_values_t = [BenchScene::Block])]
+    pub scene: Vec<BenchScene>,
+    /// Cells per side of the block scene (elements = N^2); several allowed.
+    #[arg(long, num_args = 1.., default_values_t = [32usize, 100, 316, 1000])]
+    pub cells: Vec<usize>,
+    /// Element targets of the contact scenes (each mapped to the nearest size); several
+    /// allowed.
+    #[arg(long, num_args = 1.., default_values_t = [10_000usize, 100_000, 1_000_000])]
+    pub elements: Vec<usize>,
+    /// The pile with one [[contact]] per pair of disks instead of `bodies = "all"` (a
+    /// fallback where that does not parse; small piles only).
+    #[arg(long)]
+    pub pile_pairs: bool,
+    /// Also time each contact scene with this Coulomb coefficient on its contacts and walls
+    /// (a third variant in the same rounds): what friction adds to a contact step.
+    #[arg(long)]
+    pub friction: Option<f64>,
+    /// Steps timed per size.
+    #[arg(long, default_value_t = 200)]
+    pub steps: u64,
+    /// Rounds the steps are split into, each variant timed in alternation (medians reported).
+    #[arg(long, default_value_t = ricochet::bench::DEFAULT_ROUNDS)]
+    pub rounds: u32,
+    /// Steps each variant of a contact scene runs before the timed ones (at least 2, the
+    /// first search): e.g. 600 to time the pile in contact (its disks reach the wall after
+    /// about 440 steps).
+    #[arg(long, default_value_t = ricochet::bench::DEFAULT_WARMUP)]
+    pub warmup: u64,
+    /// Time the contact scenes with plain projected Gauss-Seidel sweeps instead of the
+    /// extrapolated ones (both backends): a comparison.
+    #[arg(long)]
+    pub plain_sweeps: bool,
+    /// Also write the table(s) as JSON: the block rows as an array; with a contact scene,
+    /// an object {"block": [...], "contact": [...]}.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
+    #[arg(long)]
+    pub adapter: Option<String>,
+}
+
+/// The options of `ricochet check`.
+#[derive(Args)]
+pub struct CheckArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+}
+
+/// The options of `ricochet verify`.
+#[derive(Args)]
+pub struct VerifyArgs {
+    /// The short ladders (a few minutes on a 2-core machine).
+    #[arg(long)]
+    pub quick: bool,
+    /// Backend(s).
+    #[arg(long, value_enum, default_value = "both")]
+    pub backend: VerifyBackend,
+    /// Output folder.
+    #[arg(long, default_value = "out/verification")]
+    pub out: PathBuf,
+    /// Folder of case files to run instead of the built-in ones (those of
+    /// assets/verification/, embedded in the binary).
+    #[arg(long)]
+    pub cases: Option<PathBuf>,
+    /// Only these cases (by name); all when omitted.
+    #[arg(long, num_args = 1..)]
+    pub case: Vec<String>,
+    /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
+    #[arg(long)]
+    pub adapter: Option<String>,
+}
+
+/// `run --backend`: the library's [`ricochet::run::Backend`], as the command line names it.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Backend {
+    /// The GPU when a hardware adapter exists (or --adapter / WGPU_ADAPTER_NAME names one), else
+    /// the CPU reference, with a one-line notice (a software adapter such as Mesa lavapipe is
+    /// slower than the CPU reference).
+    Auto,
+    /// The f64 CPU reference.
+    Cpu,
+    /// The GPU; an error when no adapter exists.
+    Gpu,
+}
+
+impl From<Backend> for ricochet::run::Backend {
+    fn from(b: Backend) -> Self {
+        match b {
+            Backend::Auto => Self::Auto,
+            Backend::Cpu => Self::Cpu,
+            Backend::Gpu => Self::Gpu,
+        }
+    }
+}
+
+/// `bench --backend`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchBackend {
+    /// Both when a GPU exists, else the CPU.
+    Auto,
+    /// CPU reference only.
+    Cpu,
+    /// GPU only.
+    Gpu,
+    /// CPU and GPU in the same run (ratios comparable).
+    Both,
+}
+
+/// `bench --scene`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchScene {
+    /// The N x N block without contact (the first table, with its contact-pair column).
+    Block,
+    /// The block pressed into its base (second table).
+    Pair,
+    /// A striker into a plate at v0 / c = 0.05 (second table).
+    Striker,
+    /// A pile of disks dropped onto a rigid wall, one contact over all bodies (second table).
+    Pile,
+    /// All of the above.
+    All,
+}
+
+/// `plot --format`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PlotFormat {
+    /// PNG.
+    Png,
+    /// SVG.
+    Svg,
+}
+
+/// `verify --backend`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum VerifyBackend {
+    /// The f64 CPU reference.
+    Cpu,
+    /// The GPU (an adapter is required).
+    Gpu,
+    /// Both, in the same run (an adapter is required).
+    Both,
+}

@@ -1,0 +1,115 @@
+//! A body's element parameters: its material's constants in the forms the element uses
+//! ([`ElementParams`]), its hourglass control and bulk viscosity. Built once per body by the
+//! model; the GPU solver uploads them per body in f32 ([`crate::gpu::element::GpuBody`]).
+
+use crate::scene::{Formulation, HourglassForm, Material, MaterialModel};
+
+/// Constitutive and control parameters shared by all elements of one body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ElementParams {
+    /// Constitutive model.
+    pub model: MaterialModel,
+    /// Plane strain or plane stress.
+    pub formulation: Formulation,
+    /// Reference density.
+    pub density: f64,
+    /// Thickness.
+    pub thickness: f64,
+    /// 3D Lame constant lambda.
+    pub lambda: f64,
+    /// Shear modulus.
+    pub mu: f64,
+    /// In-plane effective lambda (plane stress: 2 lambda mu / (lambda + 2 mu)).
+    pub lambda_plane: f64,
+    /// Modulus that sets the element's fastest (dilatational) mode: lambda_plane + 2 mu + max(lambda_plane, 0).
+    pub wave_modulus: f64,
+    /// sqrt(wave_modulus / density): the speed of that mode in the reference state.
+    pub reference_speed: f64,
+    /// Hourglass form.
+    pub hourglass: HourglassForm,
+    /// Hourglass coefficient.
+    pub hourglass_coefficient: f64,
+    /// Modulus the hourglass forces scale with: 2 mu. The hourglass mode of a quad is a bending
+    /// (isochoric to first order) mode, so its physical stiffness is set by shear, as in the
+    /// physically stabilized quads of Belytschko and Bachrach (1986). Scaling it with the
+    /// dilatational modulus instead over-stiffens and over-damps it as nu approaches 1/2
+    /// (lambda grows without bound) and the hourglass work swamps the strain energy.
+    pub hourglass_modulus: f64,
+    /// Linear bulk-viscosity coefficient (0 = off).
+    pub bulk_linear: f64,
+    /// Quadratic bulk-viscosity coefficient (0 = off).
+    pub bulk_quadratic: f64,
+    /// Bulk modulus K = lambda + 2 mu / 3.
+    pub bulk_modulus: f64,
+    /// Initial yield stress (J2 plastic materials; infinite otherwise).
+    pub yield_stress: f64,
+    /// Linear isotropic hardening modulus (J2 plastic materials; 0 otherwise).
+    pub hardening: f64,
+    /// Johnson-Cook B, n, C and reference strain rate (0, 1, 0, 1 without Johnson-Cook): the
+    /// flow stress is (sigma_y + H alpha + B alpha^n)(1 + C ln(max(rate / rate0, 1))).
+    pub jc_b: f64,
+    /// Johnson-Cook n.
+    pub jc_n: f64,
+    /// Johnson-Cook C.
+    pub jc_c: f64,
+    /// Johnson-Cook reference strain rate.
+    pub jc_rate0: f64,
+}
+
+impl ElementParams {
+    /// Builds the parameters of a body from its material, formulation and thickness.
+    pub fn new(
+        material: &Material,
+        formulation: Formulation,
+        thickness: f64,
+        hourglass: HourglassForm,
+        hourglass_coefficient: f64,
+        bulk: (f64, f64),
+    ) -> Self {
+        let e = material.youngs_modulus;
+        let nu = material.poisson_ratio;
+        let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let mu = e / (2.0 * (1.0 + nu));
+        let jc = material.plasticity.and_then(|p| p.johnson_cook);
+        let lambda_plane = match formulation {
+            Formulation::PlaneStrain | Formulation::Axisymmetric => lambda,
+            Formulation::PlaneStress => 2.0 * lambda * mu / (lambda + 2.0 * mu),
+        };
+        Self {
+            model: material.model,
+            formulation,
+            density: material.density,
+            thickness,
+            lambda,
+            mu,
+            lambda_plane,
+            wave_modulus: lambda_plane + 2.0 * mu + lambda_plane.max(0.0),
+            reference_speed: ((lambda_plane + 2.0 * mu + lambda_plane.max(0.0)) / material.density)
+                .sqrt(),
+            hourglass,
+            hourglass_coefficient,
+            hourglass_modulus: 2.0 * mu,
+            bulk_linear: bulk.0,
+            bulk_quadratic: bulk.1,
+            bulk_modulus: lambda + 2.0 * mu / 3.0,
+            yield_stress: material
+                .plasticity
+                .map_or(f64::INFINITY, |p| p.yield_stress),
+            hardening: material.plasticity.map_or(0.0, |p| p.hardening_modulus),
+            jc_b: jc.map_or(0.0, |j| j.b),
+            jc_n: jc.map_or(1.0, |j| j.n),
+            jc_c: jc.map_or(0.0, |j| j.c),
+            jc_rate0: jc.map_or(1.0, |j| j.reference_strain_rate),
+        }
+    }
+
+    /// Dilatational wave speed of the formulation, sqrt((lambda_plane + 2 mu) / rho).
+    pub fn dilatational_speed(&self) -> f64 {
+        ((self.lambda_plane + 2.0 * self.mu) / self.density).sqrt()
+    }
+
+    /// Whether the bulk viscosity is on.
+    pub fn has_bulk_viscosity(&self) -> bool {
+        self.bulk_linear > 0.0 || self.bulk_quadratic > 0.0
+    }
+}
