@@ -28,11 +28,11 @@ pub const MODULE: (&str, &[&str]) = (
 /// On lavapipe every dispatch that has work costs 40 to 90 us on two threads whatever its size
 /// (its threads woken and waited for), and the per-item path has eight a step; in one workgroup
 /// the stage runs on one thread instead of two. Measured on this project's 2-core machine
-/// (BENCHMARKS.md, session 21; the two paths alternated in one process, median us a step): the
-/// pile of disks with 2 400 contact nodes (10^4 elements) 1 271 per item against 1 140 in one
-/// workgroup, 5 400 nodes 2 695 against 2 638, 9 600 nodes 3 566 against 3 765, 24 576 nodes
-/// (10^5 elements) 10 812 against 11 086; the 10^5-element striker (2 064 nodes) 8 554 against
-/// 7 736.
+/// (BENCHMARKS.md, 2026-11-25, 52afce8; the two paths alternated in one process, median us a
+/// step): the pile of disks with 2 400 contact nodes (10^4 elements) 1 271 per item against
+/// 1 140 in one workgroup, 5 400 nodes 2 695 against 2 638, 9 600 nodes 3 566 against 3 765,
+/// 24 576 nodes (10^5 elements) 10 812 against 11 086; the 10^5-element striker (2 064 nodes)
+/// 8 554 against 7 736.
 pub const ONE_NODES: usize = 1 << 12;
 
 /// Whether the contact stage runs in one workgroup for `nodes` contact nodes on an adapter of

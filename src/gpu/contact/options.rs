@@ -44,7 +44,7 @@ pub struct ContactOptions {
 /// Threads of the one-workgroup contact kernels on an adapter of `device_type`: 256 on GPUs, 8
 /// on CPU adapters. On lavapipe one workgroup runs on one core in lane groups of 8, and each
 /// barrier of a larger group switches between them: the 10^5-element striker's solve took
-/// 1.78 ms a step with 64 threads, 1.24 ms with 8 (BENCHMARKS.md, session 18).
+/// 1.78 ms a step with 64 threads, 1.24 ms with 8 (BENCHMARKS.md, 2026-11-24, dd3f611).
 pub fn one_group(device_type: wgpu::DeviceType) -> u32 {
     if device_type == wgpu::DeviceType::Cpu {
         8

@@ -42,9 +42,9 @@ pub const MULTI_SLOTS: usize = 1 << 20;
 /// workgroup does serially. Split, a step records 4 re-checks and 4 more rounds of `solve_one`,
 /// most of which return at once.
 ///
-/// Measured on an NVIDIA H100 (BENCHMARKS.md, session 16; device time of the solve part, the
-/// disks in contact): the 10^6-element pile (480 000 slots) 335 -> 134 us a step split, the
-/// step 1 070 -> 855 us; the 10^5 pile (49 152 slots) 47 -> 51 us, and the 10^5 striker
+/// Measured on an NVIDIA H100 (BENCHMARKS.md, 2026-11-24, d7fa36a; device time of the solve
+/// part, the disks in contact): the 10^6-element pile (480 000 slots) 335 -> 134 us a step
+/// split, the step 1 070 -> 855 us; the 10^5 pile (49 152 slots) 47 -> 51 us, and the 10^5 striker
 /// (about 2 000 slots, 100 sweeps a step) 1 038 -> 1 068 us: below this size the extra
 /// dispatches cost more than the re-checks they spread.
 pub const SPLIT_SLOTS: usize = 1 << 16;

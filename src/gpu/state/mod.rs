@@ -1,8 +1,8 @@
 //! Device-resident simulation state: the buffers a scene needs (and no others), allocated once in
 //! a fixed order, and the bind groups built once on them. By file: this one sizes and allocates
 //! the buffers ([`GpuState::new`]) through `src/gpu/alloc.rs` (which records them for the plan
-//! report and checkpoints); `binds.rs` builds each kernel's bind group, `record.rs` records a step as labelled dispatches
-//! ([`GpuState::record_step`]). The contact stage's buffers are
+//! report and checkpoints); `binds.rs` builds each kernel's bind group, `record.rs` records a
+//! step as labelled dispatches ([`GpuState::record_step`]). The contact stage's buffers are
 //! [`super::contact::ContactState`]'s. The CPU reference keeps the same state in host arrays
 //! ([`crate::step::cpu::CpuSolver`]).
 
@@ -26,7 +26,7 @@ use binds::Binds;
 /// control workgroup, instead of a first level over many workgroups and a dispatch of its own).
 /// On lavapipe a dispatch costs about 29 us of hand-off to its thread pool, more than the
 /// control workgroup takes to reduce these values itself. Measured on the 2-core machine
-/// (session 19, the same scene fused and not, alternated in one process): the 10^4 pile
+/// (2026-11-25, f1f92ef, the same scene fused and not, alternated in one process): the 10^4 pile
 /// (about 23 000 values) 1 449 -> 1 290-1 350 us a step; at 10^5 (about 210 000 values) the
 /// two are within the noise (the pile 10 319 against 10 125 us, the striker 7 674 against 7 446).
 pub const FUSED_LIMIT: usize = 1 << 17;
