@@ -18,7 +18,7 @@ struct Params {
     dt_groups: u32,       // workgroups of the stable-step reduction
     n_instances: u32,     // sum reductions on sample steps
     sum_groups: u32,      // workgroups of all sum reductions together
-    ticks_per_second: f32, // time is kept as a 64-bit count of ticks of end_time / 2^40
+    ticks_per_second: f32, // time is kept as a 64-bit count of ticks of end_time / 2^40 (layout.rs: ticks_per_end)
     penalty_dt: f32,      // stable step of the penalty springs alone (0: none)
     mass_damping: f32,    // alpha of run.mass_damping (0: none)
     loads: u32,           // 1: pressure or damping work is summed (sample_src after the constraints)

@@ -114,7 +114,7 @@ fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
         let borrow = select(0u, 1u, end.x < now.x);
         let r = vec2<u32>(end.x - now.x, end.y - now.y - borrow);
         let remaining = (f32(r.y) * 4294967296.0 + f32(r.x)) / params.ticks_per_second;
-        let end_s = 1099511627776.0 / params.ticks_per_second;
+        let end_s = (f32(end.y) * 4294967296.0 + f32(end.x)) / params.ticks_per_second;
         if (remaining < dt_next && dt_next - remaining > 0.01 * end_s) {
             dt_next = remaining;
         }

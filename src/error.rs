@@ -48,6 +48,17 @@ pub enum Error {
         /// The cause.
         source: std::io::Error,
     },
+    /// The output folder is in use by another run (its lock, `ricochet.lock`, is held).
+    #[error(
+        "the output folder {dir} is in use by process {holder} (another ricochet run or restart \
+         writing it): wait for it to end, or choose another --out"
+    )]
+    InUse {
+        /// The output folder.
+        dir: PathBuf,
+        /// The process id written in the lock file.
+        holder: String,
+    },
     /// A checkpoint could not be written, read, or continued (`run --restart`).
     #[error("checkpoint: {0}")]
     Checkpoint(String),
@@ -63,6 +74,9 @@ pub enum Error {
     /// The GPU backend could not be used.
     #[error("GPU: {0}")]
     Gpu(String),
+    /// A study could not run its cases, submit them to Slurm or find its threshold.
+    #[error("study: {0}")]
+    Study(String),
 }
 
 /// Characters of the key and of the value shown in the message of [`Error::Invalid`].

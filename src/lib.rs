@@ -15,7 +15,8 @@
 //! below (`tests/core/layout.rs` checks that their dependencies, and those between the modules
 //! inside [`step`], [`contact`] and [`gpu`], form no circle):
 //!
-//! 1. [`error`]; [`geometry`] (the element's geometry, pure functions of its corners)
+//! 1. [`error`]; [`geometry`] (the element's geometry, pure functions of its corners);
+//!    [`input`] (files read whole within a cap)
 //! 2. [`gmsh`] (Gmsh mesh files)
 //! 3. [`scene`]
 //! 4. [`mesh`] (generated meshes); [`element`] (a body's element parameters, the material
@@ -26,7 +27,7 @@
 //! 8. [`output`]; [`gpu`]
 //! 9. [`checkpoint`]; [`plot`]
 //! 10. [`run`]
-//! 11. [`verify`]; [`bench`](mod@bench)
+//! 11. [`verify`]; [`bench`](mod@bench); [`study`] (many runs of one scene, here or on Slurm)
 //!
 //! What two layers share lives in the lower one: the corner geometry that the scene's mesh
 //! checks, the model, the contact and the element read is in [`geometry`]; the element is below
@@ -46,6 +47,7 @@ pub mod error;
 pub mod geometry;
 pub mod gmsh;
 pub mod gpu;
+pub mod input;
 pub mod mesh;
 pub mod model;
 pub mod output;
@@ -54,6 +56,7 @@ pub mod plot;
 pub mod run;
 pub mod scene;
 pub mod step;
+pub mod study;
 pub mod verify;
 
 pub use error::{Error, Result};

@@ -1,4 +1,4 @@
-//! The `ricochet` command line: `run`, `plot`, `check`, `bench` and `verify`. The arguments are in
+//! The `ricochet` command line: `run`, `plot`, `check`, `bench`, `verify`, `study` and `collect`. The arguments are in
 //! `cli/args.rs` and each command's body in its own module under `cli/`; what a run does (load,
 //! choose the backend, run, checkpoint, restart, stop) is the library's, [`ricochet::run`].
 
@@ -42,6 +42,7 @@ fn main() -> ExitCode {
                             | ricochet::Error::Parse { .. }
                             | ricochet::Error::Invalid { .. }
                             | ricochet::Error::Checkpoint(_)
+                            | ricochet::Error::InUse { .. }
                     )
                 })
                 .unwrap_or(false);
@@ -58,5 +59,7 @@ fn dispatch(args: Cli) -> anyhow::Result<ExitCode> {
         Command::Check(a) => cli::check::check(a),
         Command::Bench(a) => cli::bench::bench(a),
         Command::Verify(a) => cli::verify::verify(a),
+        Command::Study(a) => cli::study::study(a),
+        Command::Collect(a) => cli::collect::collect(a),
     }
 }

@@ -4,6 +4,8 @@
 //!
 //! - [`patch`]: constant-strain patch tests (single quad, distorted patches, a Gmsh mesh), exact stress;
 //! - [`gmsh`]: the shipped Gmsh MSH 4.1 meshes (counts, ASCII against binary, orientation);
+//! - [`mesh_files`]: hostile and unusual mesh files: any binary data size, streams and FIFOs,
+//!   nodes found by their tags (permuted, repeated, 0, out of range), numbered physical groups;
 //! - [`rigid`]: rigid translation and (large) rotation of neo-Hookean elements, spinning disk;
 //! - [`hourglass`]: hourglass modes, their control (stiffness, viscous) and reported energy;
 //! - [`load_curve`]: velocities and pressures as tables of (time, value), the pulled bar's closed form;
@@ -36,11 +38,17 @@
 //! - [`fuzz`]: 2000 mutants of the scenes of `assets/` through the load path and a short CPU run
 //!   (and a sample through `ricochet check`): no panic, hang, escaped file, unbounded memory or
 //!   non-finite number in a completed run;
+//! - [`fuzz_files`]: mutated mesh files, checkpoints and output folders: refused naming the
+//!   file, or run to a whole history; nothing hangs;
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs;
 //! - [`plot`]: `ricochet plot` and `run --plots`: every picture at its size, identical bytes twice,
 //!   GIF frames, the colour of the patch test's uniform stress, refused folders and fields;
 //! - [`restart`]: checkpoints and `run --restart` give the outputs of the run never stopped, bit
 //!   for bit, after a crash and after an interruption, with contact; bad checkpoints exit 2;
+//! - [`checkpoint_checks`]: checkpoints that are streams or huge, another run's, damaged, or
+//!   whose mesh, `history.csv` or `fields/` changed since: exit 2 naming the file;
+//! - [`output_lock`]: a second run or restart into an output folder in use exits 2 naming the
+//!   folder and the process; a lock left by a process that ended does not block;
 //! - [`run_library`]: the run as a library call (`run::execute`): progress reported, an interrupt
 //!   flag giving an `interrupted` outcome and summary, and a restart through the same call;
 //! - [`verify_cases`]: the verification cases as data, and `verify`'s exit status on a missed bound;
@@ -60,6 +68,8 @@ mod augmented;
 mod axisymmetric;
 #[path = "core/bad_input.rs"]
 mod bad_input;
+#[path = "core/checkpoint_checks.rs"]
+mod checkpoint_checks;
 #[path = "core/contact.rs"]
 mod contact;
 #[path = "core/energy.rs"]
@@ -68,6 +78,8 @@ mod energy;
 mod friction;
 #[path = "core/fuzz.rs"]
 mod fuzz;
+#[path = "core/fuzz_files.rs"]
+mod fuzz_files;
 #[path = "core/general_contact.rs"]
 mod general_contact;
 #[path = "core/gmsh.rs"]
@@ -82,6 +94,10 @@ mod layout;
 mod load_curve;
 #[path = "core/mass.rs"]
 mod mass;
+#[path = "core/mesh_files.rs"]
+mod mesh_files;
+#[path = "core/output_lock.rs"]
+mod output_lock;
 #[path = "core/outputs.rs"]
 mod outputs;
 #[path = "core/patch.rs"]

@@ -1102,6 +1102,10 @@ mod traction;
 
 #[path = "gpu/contact.rs"]
 mod contact;
+#[path = "gpu/end_time.rs"]
+mod end_time;
+#[path = "gpu/fuzz.rs"]
+mod fuzz;
 #[path = "gpu/general.rs"]
 mod general;
 #[path = "gpu/patch.rs"]

@@ -35,6 +35,13 @@ pub enum Command {
     /// Run the verification suite (assets/verification/): error against wall time per case,
     /// method and backend; writes results.csv, report.md and one plot per case.
     Verify(VerifyArgs),
+    /// Run a study: the cases of a study file (a base scene with keys varied: a grid, lists, a
+    /// Latin hypercube, or a threshold search), here (one worker per hardware GPU, else per CPU
+    /// core) or as a Slurm job array (--slurm); a rerun continues where it stopped.
+    Study(StudyArgs),
+    /// Collect a study's folder into DIR/results.csv and DIR/results.json: one row per case with
+    /// its status, parameters and collected figures.
+    Collect(CollectArgs),
 }
 
 /// The options of `ricochet run`.
@@ -52,7 +59,9 @@ pub struct RunArgs {
     /// Override run.end_time.
     #[arg(long)]
     pub end_time: Option<f64>,
-    /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
+    /// Adapter: an index (0, 1, ...: discrete first, then by PCI bus id), a PCI bus id
+    /// (0000:3b:00.0) or a name substring; also by name from WGPU_ADAPTER_NAME. Within
+    /// CUDA_VISIBLE_DEVICES / ROCR_VISIBLE_DEVICES when set.
     #[arg(long)]
     pub adapter: Option<String>,
     /// Then draw the pictures of the run (as `ricochet plot OUT`).
@@ -71,8 +80,16 @@ pub struct RunArgs {
 /// The options of `ricochet plot`.
 #[derive(Args)]
 pub struct PlotArgs {
-    /// The run's output folder (with history.csv, summary.json, fields.pvd).
+    /// The run's output folder (with history.csv, summary.json, fields.pvd), or a study's folder
+    /// (with study.json) with --figure and --against.
     pub out: PathBuf,
+    /// A study's collected figure to draw (into DIR/plots/<FIGURE>_vs_<PARAM>.png).
+    #[arg(long, requires = "against", conflicts_with_all = ["field", "times", "range", "animate"])]
+    pub figure: Option<String>,
+    /// The study's parameter the figure is drawn against (one line per combination of the
+    /// other parameters).
+    #[arg(long, requires = "figure")]
+    pub against: Option<String>,
     /// Field of the field pictures (default von_mises).
     #[arg(long, value_parser = ["von_mises", "pressure", "velocity", "displacement", "plastic_strain"])]
     pub field: Option<String>,
@@ -142,8 +159,72 @@ pub struct BenchArgs {
 /// The options of `ricochet check`.
 #[derive(Args)]
 pub struct CheckArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML), or a study file (with a [study] table): every case's scene is
+    /// materialised and checked.
     pub scene: PathBuf,
+}
+
+/// The options of `ricochet study`.
+#[derive(Args)]
+pub struct StudyArgs {
+    /// Study file (TOML).
+    pub study: PathBuf,
+    /// The study's folder (default out/<study name>): DIR/cases/<id>/, DIR/results.csv.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Workers on this machine (default: one per hardware GPU adapter, else one per CPU core).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub workers: Option<u32>,
+    /// Backend of the runs (default the study's `backend`, else auto).
+    #[arg(long, value_enum)]
+    pub backend: Option<Backend>,
+    /// Run the cases as a Slurm job array: write DIR/slurm/array.sh and collect.sh and submit
+    /// them with sbatch.
+    #[arg(long)]
+    pub slurm: bool,
+    /// With --slurm: the partition.
+    #[arg(long, requires = "slurm")]
+    pub partition: Option<String>,
+    /// With --slurm: the account.
+    #[arg(long, requires = "slurm")]
+    pub account: Option<String>,
+    /// With --slurm: at most K array tasks at once (the `%K` throttle).
+    #[arg(long, value_name = "K", requires = "slurm", value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_parallel: Option<u32>,
+    /// With --slurm: GPUs per task (`--gpus-per-task`).
+    #[arg(long, value_name = "N", requires = "slurm")]
+    pub gpus_per_task: Option<u32>,
+    /// With --slurm: CPUs per task (`--cpus-per-task`, default 1).
+    #[arg(long, value_name = "N", requires = "slurm", value_parser = clap::value_parser!(u32).range(1..))]
+    pub cpus_per_task: Option<u32>,
+    /// With --slurm: each task's time limit (`--time`, Slurm's forms: MM, HH:MM:SS, D-HH).
+    #[arg(long, value_name = "T", requires = "slurm")]
+    pub time: Option<String>,
+    /// With --slurm: seconds before the time limit at which a task's run checkpoints, stops and
+    /// requeues its task (`--signal=B:TERM@S`).
+    #[arg(long, value_name = "S", requires = "slurm", default_value_t = 120)]
+    pub signal_seconds: u32,
+    /// With --slurm: a further sbatch option for both scripts (`--sbatch=--mem=4G`); repeatable.
+    #[arg(
+        long,
+        value_name = "OPTION",
+        requires = "slurm",
+        allow_hyphen_values = true
+    )]
+    pub sbatch: Vec<String>,
+    /// With --slurm: write the scripts without submitting them.
+    #[arg(long, requires = "slurm")]
+    pub no_submit: bool,
+    /// With --slurm: wait until the collect job has ended, then print the results' counts.
+    #[arg(long, requires = "slurm", conflicts_with = "no_submit")]
+    pub wait: bool,
+}
+
+/// The options of `ricochet collect`.
+#[derive(Args)]
+pub struct CollectArgs {
+    /// The study's folder (with study.json).
+    pub dir: PathBuf,
 }
 
 /// The options of `ricochet verify`.

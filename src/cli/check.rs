@@ -1,7 +1,8 @@
 //! `ricochet check SCENE`: validates a scene without running it (the library's
 //! [`ricochet::run::load`]) and prints its plan: the model and its bodies, the stable step, the
 //! contact tables and how they enforce contact, the loads, the memory estimate, the outputs and
-//! the stages that will run.
+//! the stages that will run. A study file (one with a `[study]` table) is checked case by case
+//! ([`ricochet::study::Study::check`]).
 
 use std::process::ExitCode;
 
@@ -13,8 +14,27 @@ use ricochet::step::cpu::CpuSolver;
 
 use super::args::CheckArgs;
 
-/// `ricochet check SCENE`.
+/// `ricochet check SCENE` (or a study file: every case's scene checked).
 pub fn check(args: CheckArgs) -> anyhow::Result<ExitCode> {
+    if ricochet::study::spec::is_study_file(&args.scene) {
+        let study = ricochet::study::Study::load(&args.scene)?;
+        let root = std::path::PathBuf::from("out").join(&study.name);
+        let cases = study.check(&root)?;
+        println!(
+            "study {} ({}): {} {} cases of {} checked{}",
+            study.name,
+            study.file.display(),
+            cases.len(),
+            study.kind.keyword(),
+            study.scene.display(),
+            if matches!(study.kind, ricochet::study::Kind::Threshold(_)) {
+                " (the two ends of the bracket)"
+            } else {
+                ""
+            }
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
     let (scene, model, plan) = ricochet::run::load(&args.scene, None)?;
     print_plan(&scene, model, &plan)?;
     Ok(ExitCode::SUCCESS)

@@ -1,5 +1,6 @@
 //! `ricochet plot` (and `run --plots`): draws a run's pictures from its output folder with
-//! [`ricochet::plot::plot`] and says where they went.
+//! [`ricochet::plot::plot`] and says where they went; or a study's figure against a parameter
+//! (`--figure`, `--against`: [`ricochet::study::plot::plot`]).
 
 use std::path::Path;
 use std::process::ExitCode;
@@ -12,12 +13,23 @@ use super::args::{PlotArgs, PlotFormat};
 pub fn plot(args: PlotArgs) -> anyhow::Result<ExitCode> {
     let PlotArgs {
         out,
+        figure,
+        against,
         field,
         times,
         range,
         animate,
         format,
     } = args;
+    let picture_format = match format {
+        PlotFormat::Png => ricochet::plot::Format::Png,
+        PlotFormat::Svg => ricochet::plot::Format::Svg,
+    };
+    if let (Some(figure), Some(against)) = (figure, against) {
+        let path = ricochet::study::plot::plot(&out, &figure, &against, picture_format)?;
+        println!("plot: {}", path.display());
+        return Ok(ExitCode::SUCCESS);
+    }
     let opts = PlotOptions {
         field: field
             .as_deref()
@@ -25,10 +37,7 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<ExitCode> {
         times,
         range: range.map(|r| (r[0], r[1])),
         animate,
-        format: match format {
-            PlotFormat::Png => ricochet::plot::Format::Png,
-            PlotFormat::Svg => ricochet::plot::Format::Svg,
-        },
+        format: picture_format,
     };
     draw(&out, &opts)?;
     Ok(ExitCode::SUCCESS)

@@ -1,7 +1,10 @@
-//! The headless GPU context: instance from the environment, adapter by name, device and queue.
+//! The headless GPU context: instance from the environment, the adapter [`super::choice`] picks
+//! (by index, PCI bus id or name, within `CUDA_VISIBLE_DEVICES` / `ROCR_VISIBLE_DEVICES`),
+//! device and queue.
 
 use std::sync::{Arc, OnceLock};
 
+use super::choice::{arrange, choose, Candidate, Selector, Visible};
 use crate::error::{Error, Result};
 
 /// A device and queue on a chosen adapter.
@@ -35,6 +38,29 @@ fn describe(info: &wgpu::AdapterInfo) -> String {
     format!("{} ({:?}, {:?})", info.name, info.backend, info.device_type)
 }
 
+/// The adapters a run may open, in the order `--adapter INDEX` counts them
+/// ([`super::choice::arrange`]: by kind, then PCI bus id; within `CUDA_VISIBLE_DEVICES` and
+/// `ROCR_VISIBLE_DEVICES`), as `(description, is software)`.
+///
+/// # Errors
+/// [`Error::Gpu`] for a visibility variable that cannot be mapped (a UUID).
+pub fn visible_adapters() -> Result<Vec<(String, bool)>> {
+    let inst = instance();
+    let adapters = pollster::block_on(inst.enumerate_adapters(wgpu::Backends::all()));
+    let infos: Vec<wgpu::AdapterInfo> = adapters.iter().map(|a| a.get_info()).collect();
+    let candidates: Vec<Candidate> = infos.iter().map(Candidate::from).collect();
+    let order = arrange(&candidates, &Visible::from_env()).map_err(Error::Gpu)?;
+    Ok(order
+        .into_iter()
+        .map(|i| {
+            (
+                describe(&infos[i]),
+                infos[i].device_type == wgpu::DeviceType::Cpu,
+            )
+        })
+        .collect())
+}
+
 /// Names of the adapters the environment offers.
 pub fn adapters() -> Vec<String> {
     let inst = instance();
@@ -45,41 +71,34 @@ pub fn adapters() -> Vec<String> {
 }
 
 impl GpuContext {
-    /// Opens the adapter whose name contains `name` (case-insensitive), or else the one named by
-    /// `WGPU_ADAPTER_NAME`, or else the most capable one (discrete, integrated, virtual, CPU).
+    /// Opens the adapter that `adapter` names ([`Selector::parse`]: an index into the list of
+    /// [`visible_adapters`], a PCI bus id, or a substring of the name, case-insensitive), or else
+    /// the one whose name contains `WGPU_ADAPTER_NAME`, or else the first of the list (the most
+    /// capable kind: discrete, integrated, virtual, CPU), among the adapters that
+    /// `CUDA_VISIBLE_DEVICES` and `ROCR_VISIBLE_DEVICES` leave ([`super::choice`]).
     ///
     /// # Errors
-    /// [`Error::Gpu`] naming the adapters found when none exists or none matches.
-    pub fn new(name: Option<&str>) -> Result<GpuContext> {
+    /// [`Error::Gpu`] naming the adapters found when none exists or none matches, or for a
+    /// visibility variable that cannot be mapped.
+    pub fn new(adapter: Option<&str>) -> Result<GpuContext> {
         let inst = instance();
         let adapters = pollster::block_on(inst.enumerate_adapters(wgpu::Backends::all()));
-        let wanted = name
-            .map(str::to_string)
-            .or_else(|| std::env::var("WGPU_ADAPTER_NAME").ok())
-            .filter(|s| !s.is_empty());
-        let found: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
-        let rank = |t: wgpu::DeviceType| match t {
-            wgpu::DeviceType::DiscreteGpu => 0,
-            wgpu::DeviceType::IntegratedGpu => 1,
-            wgpu::DeviceType::VirtualGpu => 2,
-            wgpu::DeviceType::Cpu => 3,
-            wgpu::DeviceType::Other => 4,
+        let selector = match adapter.filter(|s| !s.trim().is_empty()) {
+            Some(a) => Some(Selector::parse(a)),
+            None => std::env::var("WGPU_ADAPTER_NAME")
+                .ok()
+                .filter(|s| !s.is_empty())
+                .map(Selector::Name),
         };
-        let adapter = adapters
-            .into_iter()
-            .filter(|a| match &wanted {
-                Some(w) => a.get_info().name.to_lowercase().contains(&w.to_lowercase()),
-                None => true,
-            })
-            .min_by_key(|a| rank(a.get_info().device_type))
-            .ok_or_else(|| {
-                Error::Gpu(match &wanted {
-                    Some(w) => format!("no GPU adapter matches {w:?}; found: {found:?}"),
-                    None => "no GPU adapter found (install a Vulkan driver, e.g. Mesa lavapipe: \
-                             apt-get install mesa-vulkan-drivers)"
-                        .to_string(),
-                })
-            })?;
+        let candidates: Vec<Candidate> = adapters
+            .iter()
+            .map(|a| Candidate::from(&a.get_info()))
+            .collect();
+        let chosen =
+            choose(&candidates, selector.as_ref(), &Visible::from_env()).map_err(Error::Gpu)?;
+        let Some(adapter) = adapters.into_iter().nth(chosen) else {
+            return Err(Error::Gpu(format!("adapter {chosen} vanished")));
+        };
         let info = adapter.get_info();
         let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let mut limits = wgpu::Limits::default();

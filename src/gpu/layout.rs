@@ -104,16 +104,37 @@ const _: () = assert!(std::mem::size_of::<Control>() == 84);
 const _: () = assert!(std::mem::size_of::<Instance>() == 32);
 const _: () = assert!(std::mem::offset_of!(Control, state) as u64 == CONTROL_STATE_OFFSET);
 
-/// Ticks per end time: the GPU keeps time as a 64-bit count of `end_time / 2^40`.
+/// Ticks per end time: the GPU keeps time as a 64-bit count of `end_time / 2^40` (fewer ticks
+/// for an end time so short that `2^40 / end_time` ticks per second overflows `f32`, see
+/// [`ticks_per_end`]).
 pub const TICKS_PER_END: f64 = (1u64 << 40) as f64;
+
+/// The most ticks per second the kernels are given (`Params::ticks_per_second`, an `f32`): 2^120,
+/// which leaves a step of up to 2^8 s room before `dt * ticks_per_second` overflows.
+pub const MAX_TICKS_PER_SECOND: f64 = 1.329_227_995_784_916e36;
+
+/// The fewest ticks per end time a run may have ([`ticks_per_end`]): 2^20, a millionth of the
+/// run, within which the kernels' 1 % rules (the last step's clip, a sample's slack) still hold.
+pub const MIN_TICKS_PER_END: f64 = (1u64 << 20) as f64;
+
+/// Ticks per end time of a run ending at `end_time`: [`TICKS_PER_END`], or for an end time
+/// below about 1e-24 s the largest power of two that keeps the ticks per second within an
+/// `f32` (2^40 / 1e-28 s overflowed to infinity, and the run stood still at t = 0).
+pub fn ticks_per_end(end_time: f64) -> f64 {
+    let mut n = TICKS_PER_END;
+    while n > 1.0 && n / end_time > MAX_TICKS_PER_SECOND {
+        n *= 0.5;
+    }
+    n
+}
 
 /// A time in ticks as (lo, hi).
 pub fn ticks(t: f64, end_time: f64) -> [u32; 2] {
-    let n = (t / end_time * TICKS_PER_END).round().max(0.0) as u64;
+    let n = (t / end_time * ticks_per_end(end_time)).round().max(0.0) as u64;
     [n as u32, (n >> 32) as u32]
 }
 
 /// Seconds of a tick count (lo, hi).
 pub fn seconds(lo: u32, hi: u32, end_time: f64) -> f64 {
-    ((hi as u64) << 32 | lo as u64) as f64 * end_time / TICKS_PER_END
+    ((hi as u64) << 32 | lo as u64) as f64 * end_time / ticks_per_end(end_time)
 }

@@ -8,12 +8,15 @@
 //! kernels share is WGSL concatenated before them ([`shader`]: `common.wgsl`; `curve.wgsl`,
 //! `tree.wgsl`, `reduce_common.wgsl`, `contact_common.wgsl`). [`kernels::Kernels`] holds the
 //! compiled pipelines, [`state::GpuState`] the buffers (allocated through `alloc.rs`),
-//! [`solver::GpuSolver`] drives them in batches of steps. All sums are gathers or fixed-order
-//! trees: the same scene on the same adapter gives the same bits.
+//! [`solver::GpuSolver`] drives them in batches of steps; [`context`] opens the adapter that
+//! [`choice`] picks (by index, PCI bus id or name, within `CUDA_VISIBLE_DEVICES` /
+//! `ROCR_VISIBLE_DEVICES`). All sums are gathers or fixed-order trees: the same scene on the same
+//! adapter gives the same bits.
 
 mod alloc;
 pub mod boundary;
 mod checkpoint;
+pub mod choice;
 pub mod contact;
 pub mod context;
 pub mod control;

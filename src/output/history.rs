@@ -4,6 +4,8 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+use xxhash_rust::xxh3::Xxh3;
+
 use crate::error::{Error, Result};
 use crate::step::Sample;
 
@@ -43,6 +45,14 @@ impl EnergyAudit {
             - s.external
     }
 
+    /// Whether every number of the audit is finite (a checkpoint's is checked before a restart
+    /// takes it over: a NaN would end in `summary.json` as `null`).
+    pub fn is_finite(&self) -> bool {
+        self.initial.is_none_or(f64::is_finite)
+            && self.largest.is_finite()
+            && self.max_error.is_finite()
+    }
+
     /// The balance error of `s` relative to the largest energy seen so far (this sample included).
     pub fn error(&mut self, s: &Sample) -> f64 {
         let total = Self::total(s);
@@ -69,10 +79,13 @@ impl EnergyAudit {
     }
 }
 
-/// Writes `history.csv` row by row.
+/// Writes `history.csv` row by row, keeping the digest of what it wrote (a checkpoint records
+/// it, and a restart compares the file with it).
 pub struct HistoryWriter {
     path: PathBuf,
     out: BufWriter<File>,
+    /// XXH3 of the bytes written so far.
+    hash: Xxh3,
     /// Bytes and rows written so far (header included in the bytes).
     bytes: u64,
     rows: u64,
@@ -105,6 +118,7 @@ impl HistoryWriter {
         let mut w = Self {
             path: path.to_path_buf(),
             out: BufWriter::new(file),
+            hash: Xxh3::new(),
             bytes: 0,
             rows: 0,
             plastic,
@@ -135,35 +149,89 @@ impl HistoryWriter {
         Ok(w)
     }
 
-    /// Continues the file at `path` after its first `bytes` bytes (`rows` rows): what a
-    /// checkpoint recorded. Anything after them (rows written after the checkpoint) is cut off.
+    /// Continues the file at `path` after its first `bytes` bytes (`rows` rows, digest
+    /// `digest`): what a checkpoint recorded. Those bytes are read first and must be what the
+    /// run wrote (their digest, whole rows, `rows` of them); anything after them (rows written
+    /// after the checkpoint) is then cut off.
     ///
     /// # Errors
-    /// [`Error::Checkpoint`] when the file is shorter than `bytes` (it is not the checkpoint's),
-    /// [`Error::Write`] when it cannot be opened.
+    /// [`Error::Checkpoint`] naming the file when it is not a regular file, is shorter than
+    /// `bytes`, or its first `bytes` bytes are not the checkpoint's (another run's history,
+    /// resaved with other line ends, cut mid-row); [`Error::Write`] when it cannot be opened.
     pub fn resume(
         path: &Path,
         bytes: u64,
         rows: u64,
+        digest: u64,
         plastic: bool,
         friction: bool,
     ) -> Result<Self> {
-        use std::io::{Seek, SeekFrom};
+        use std::io::{Read, Seek, SeekFrom};
         let write_err = |source| Error::Write {
             path: path.to_path_buf(),
             source,
+        };
+        let not_ours = |why: String| {
+            Error::Checkpoint(format!(
+                "{}: {why}: not the history the checkpoint was taken after (changed since, or \
+                 another run's)",
+                path.display()
+            ))
         };
         let mut file = std::fs::OpenOptions::new()
             .read(true)
             .write(true)
             .open(path)
             .map_err(write_err)?;
-        let len = file.metadata().map_err(write_err)?.len();
+        let meta = file.metadata().map_err(write_err)?;
+        if !meta.is_file() {
+            return Err(not_ours("not a regular file".into()));
+        }
+        let len = meta.len();
         if len < bytes {
-            return Err(Error::Checkpoint(format!(
-                "{}: {len} bytes, but the checkpoint was taken after {bytes}: not the \
-                 checkpoint's history",
-                path.display()
+            return Err(not_ours(format!(
+                "{len} bytes, but the checkpoint was taken after {bytes}"
+            )));
+        }
+        // The first `bytes` bytes, read in pieces: their digest, their lines.
+        let mut hash = Xxh3::new();
+        let (mut lines, mut comments, mut last) = (0u64, 0u64, b'\n');
+        let mut line_start = true;
+        let mut buf = vec![0u8; 1 << 16];
+        let mut reader = (&mut file).take(bytes);
+        loop {
+            let n = reader.read(&mut buf).map_err(write_err)?;
+            if n == 0 {
+                break;
+            }
+            let piece = &buf[..n];
+            hash.update(piece);
+            for &b in piece {
+                if line_start && b == b'#' {
+                    comments += 1;
+                }
+                line_start = b == b'\n';
+                if line_start {
+                    lines += 1;
+                }
+            }
+            last = piece[n - 1];
+        }
+        if hash.digest() != digest {
+            return Err(not_ours(format!(
+                "its first {bytes} bytes differ from those the run wrote"
+            )));
+        }
+        // The digest matches: these checks find a checkpoint whose counts were changed.
+        if last != b'\n' || lines < comments + 1 || lines - comments - 1 != rows {
+            return Err(not_ours(format!(
+                "its first {bytes} bytes hold {} rows (ending {}), the checkpoint says {rows}",
+                lines.saturating_sub(comments + 1),
+                if last == b'\n' {
+                    "at a row's end"
+                } else {
+                    "mid-row"
+                }
             )));
         }
         file.set_len(bytes).map_err(write_err)?;
@@ -171,11 +239,17 @@ impl HistoryWriter {
         Ok(Self {
             path: path.to_path_buf(),
             out: BufWriter::new(file),
+            hash,
             bytes,
             rows,
             plastic,
             friction,
         })
+    }
+
+    /// The digest of the bytes written so far (as a checkpoint records it).
+    pub fn digest(&self) -> u64 {
+        self.hash.digest()
     }
 
     /// Flushes the rows written so far and returns (bytes, rows) of the file.
@@ -192,6 +266,8 @@ impl HistoryWriter {
 
     fn line(&mut self, s: &str) -> Result<()> {
         self.bytes += s.len() as u64 + 1;
+        self.hash.update(s.as_bytes());
+        self.hash.update(b"\n");
         writeln!(self.out, "{s}").map_err(|source| Error::Write {
             path: self.path.clone(),
             source,

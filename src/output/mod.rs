@@ -1,7 +1,9 @@
-//! Run outputs: `history.csv`, `summary.json`, and VTK fields (`fields/*.vtu`, `fields.pvd`).
+//! Run outputs: `history.csv`, `summary.json`, and VTK fields (`fields/*.vtu`, `fields.pvd`),
+//! and the lock of an output folder in use (`lock.rs`). Host-side only, no GPU twin.
 
 pub mod fields;
 pub mod history;
+pub mod lock;
 pub mod summary;
 
 use std::path::Path;

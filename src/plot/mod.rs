@@ -11,11 +11,13 @@
 //!   snapshots), equal aspect, axes in metres;
 //! - with `animate`, `field_<name>.gif`: those pictures as frames.
 //!
-//! The readers are in [`read`], the charts in [`charts`], the field pictures in [`field`].
+//! The readers are in [`read`], the charts in [`charts`], the field pictures in [`field`]; a
+//! study's figure against a parameter ([`xy_chart`]) in [`series`].
 
 pub mod charts;
 pub mod field;
 pub mod read;
+pub mod series;
 pub mod style;
 
 use std::fs::File;
@@ -182,7 +184,10 @@ pub fn check_folder(dir: &Path) -> Result<()> {
 
 /// The scene name and status of `summary.json` when there is one ("interrupted" when not).
 fn run_label(dir: &Path) -> String {
-    let Ok(text) = std::fs::read_to_string(dir.join("summary.json")) else {
+    let text = crate::input::read_capped(&dir.join("summary.json"), 1 << 20)
+        .ok()
+        .and_then(|b| String::from_utf8(b).ok());
+    let Some(text) = text else {
         return "no summary.json: interrupted run".into();
     };
     let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
@@ -250,6 +255,35 @@ fn chart(
         Format::Svg => {
             let root = SVGBackend::new(path, charts::SIZE).into_drawing_area();
             charts::draw(&root, title, y_desc, time, lines, error).map_err(|e| plot_error(path, e))
+        }
+    }
+}
+
+/// Draws `series` (y against x, one line per label) as one chart at `path` in `format`.
+///
+/// # Errors
+/// [`Error::Write`] / [`Error::Plot`] when the chart cannot be drawn or written.
+pub fn xy_chart(
+    path: &Path,
+    format: Format,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[series::Series],
+) -> Result<()> {
+    if !style::register_font() {
+        return Err(Error::Plot("the embedded font is invalid".into()));
+    }
+    match format {
+        Format::Png => {
+            let rgb = raster(charts::SIZE, path, |root| {
+                series::draw(root, title, x_desc, y_desc, series)
+            })?;
+            write_png(path, charts::SIZE, &rgb)
+        }
+        Format::Svg => {
+            let root = SVGBackend::new(path, charts::SIZE).into_drawing_area();
+            series::draw(&root, title, x_desc, y_desc, series).map_err(|e| plot_error(path, e))
         }
     }
 }

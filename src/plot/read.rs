@@ -5,10 +5,20 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
+/// The largest output file read back (`history.csv`, `fields.pvd`, a VTU file).
+pub const MAX_FILE_BYTES: u64 = 16 << 30;
+
+/// The bytes of the regular file `path`, within [`MAX_FILE_BYTES`] ([`crate::input::read_capped`]).
+fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    crate::input::read_capped(path, MAX_FILE_BYTES).map_err(|message| parse_error(path, message))
+}
+
 fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|source| Error::Read {
-        file: path.to_path_buf(),
-        source,
+    String::from_utf8(read_bytes(path)?).map_err(|e| {
+        parse_error(
+            path,
+            format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+        )
     })
 }
 
@@ -34,7 +44,8 @@ impl History {
     /// naming the line.
     ///
     /// # Errors
-    /// [`Error::Read`] when the file cannot be read, [`Error::Parse`] when it is malformed.
+    /// [`Error::Parse`] when the file cannot be read (missing, not a regular file, over
+    /// [`MAX_FILE_BYTES`]) or is malformed.
     pub fn read(path: &Path) -> Result<Self> {
         let text = read_text(path)?;
         // Comment lines (`#`, such as the axisymmetric note) before the header.
@@ -110,8 +121,8 @@ fn xml_unescape(s: &str) -> String {
 /// Reads `fields.pvd` (in `dir`): its snapshots in time order, file paths resolved against `dir`.
 ///
 /// # Errors
-/// [`Error::Read`] when the file cannot be read, [`Error::Parse`] when an entry lacks its time or
-/// file.
+/// [`Error::Parse`] when the file cannot be read (missing, not a regular file, over
+/// [`MAX_FILE_BYTES`]) or an entry lacks its time or file.
 pub fn snapshots(dir: &Path) -> Result<Vec<SnapshotFiles>> {
     let path = dir.join("fields.pvd");
     let text = read_text(&path)?;
@@ -300,13 +311,10 @@ fn decode(ty: &str, bytes: &[u8]) -> std::result::Result<Vec<f64>, String> {
 /// zlib-compressed or not, with UInt32 or UInt64 headers.
 ///
 /// # Errors
-/// [`Error::Read`] when the file cannot be read, [`Error::Parse`] when it is not such a file
-/// (another encoding, arrays of the wrong length, a cell that names a missing point).
+/// [`Error::Parse`] when the file cannot be read (missing, not a regular file, over
+/// [`MAX_FILE_BYTES`]) or is not such a file (another encoding, arrays of the wrong length, a cell that names a missing point).
 pub fn vtu(path: &Path) -> Result<Piece> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Read {
-        file: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = read_bytes(path)?;
     let bad = |m: String| parse_error(path, m);
     let xml_end = bytes
         .windows(13)

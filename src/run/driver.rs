@@ -5,11 +5,12 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::checkpoint::{Checkpoint, Checkpointing};
+use crate::checkpoint::{digest, mesh_digests, Checkpoint, Checkpointing};
 use crate::error::{Error, Result};
 use crate::model::Model;
 use crate::output::fields::FieldWriter;
 use crate::output::history::{EnergyAudit, HistoryWriter};
+use crate::output::lock::OutputLock;
 use crate::output::summary::Summary;
 use crate::output::{create_dir, write_file};
 use crate::plan::Plan;
@@ -86,6 +87,8 @@ pub fn run_with(
     options: RunOptions,
 ) -> Result<RunResult> {
     create_dir(out_dir)?;
+    // Held until the run returns: a second run into this folder is refused meanwhile.
+    let _lock = OutputLock::acquire(out_dir)?;
     let bodies: Vec<String> = model.bodies.iter().map(|b| b.name.clone()).collect();
     let contacts = model.interface_names();
     let history_path = out_dir.join("history.csv");
@@ -116,7 +119,29 @@ pub fn run_with(
                     solver.backend()
                 )));
             }
-            solver.restore_state(&c.solver)?;
+            // The state's own messages say what did not fit; the file is named here.
+            solver.restore_state(&c.solver).map_err(|e| match e {
+                Error::Checkpoint(m) => Error::Checkpoint(format!(
+                    "{}: {m}",
+                    out_dir.join(crate::checkpoint::FILE).display()
+                )),
+                e => e,
+            })?;
+            // The state decoded is the one the checkpoint describes (the solver's own time and
+            // step count, not only the checkpoint's copies of them).
+            if solver.time().to_bits() != c.time.to_bits() || solver.steps() != c.steps {
+                return Err(Error::Checkpoint(format!(
+                    "{}: its solver state is at step {}, t = {:e} s, but the checkpoint says step \
+                     {}, t = {:e} s: damaged",
+                    out_dir.join(crate::checkpoint::FILE).display(),
+                    solver.steps(),
+                    solver.time(),
+                    c.steps,
+                    c.time
+                )));
+            }
+            // Every file the restart keeps is checked before any is changed.
+            c.check_snapshots(out_dir)?;
             audit = c.audit.clone();
             loop_seconds = c.loop_seconds;
             rows_before = c.history_rows as usize;
@@ -125,6 +150,7 @@ pub fn run_with(
                     &history_path,
                     c.history_bytes,
                     c.history_rows,
+                    c.history_digest,
                     model.has_plasticity(),
                     model.has_friction(),
                 )?,
@@ -141,6 +167,7 @@ pub fn run_with(
         }
     };
     let interval = options.checkpointing.as_ref().map(|c| c.interval);
+    let meshes = mesh_digests(scene);
     let next_after = |t: f64| interval.map(|i| ((t / i).floor() + 1.0) * i);
     let mut next_checkpoint = next_after(solver.time());
     // A summary saying "running" before the first step: an unwritable or full output folder is
@@ -174,9 +201,12 @@ pub fn run_with(
             return Ok(());
         };
         let (history_bytes, history_rows) = history.flush()?;
+        let solver_state = solver.save_state()?;
         Checkpoint {
             scene_path: c.scene_path.clone(),
             scene_text: c.scene_text.clone(),
+            scene_digest: digest(c.scene_text.as_bytes()),
+            meshes: meshes.clone(),
             end_time_override: c.end_time_override,
             interval: c.interval,
             backend: solver.backend().to_string(),
@@ -185,20 +215,42 @@ pub fn run_with(
             time: solver.time(),
             history_bytes,
             history_rows,
+            history_digest: history.digest(),
             snapshots: fields
                 .as_ref()
                 .map(|f| f.entries().to_vec())
                 .unwrap_or_default(),
             audit: audit.clone(),
             loop_seconds,
-            solver: solver.save_state()?,
+            solver_digest: digest(&solver_state),
+            solver: solver_state,
         }
         .write(out_dir)
     };
     'outer: loop {
         let t0 = Instant::now();
+        let before = (solver.steps(), solver.time().to_bits());
         solver.advance(&mut events)?;
         loop_seconds += t0.elapsed().as_secs_f64();
+        // A solver that neither took a step nor said why (a restored state marked finished
+        // without its end) would be asked again forever.
+        if events.is_empty() && before == (solver.steps(), solver.time().to_bits()) {
+            let why = format!(
+                "the solver stopped at step {}, t = {:e} s, before the end time {:e} s without \
+                 saying why",
+                solver.steps(),
+                solver.time(),
+                scene.run.end_time
+            );
+            if options.resume.is_some() {
+                return Err(Error::Checkpoint(format!(
+                    "{}: {why}: its saved state is damaged",
+                    out_dir.join(crate::checkpoint::FILE).display()
+                )));
+            }
+            failure = Some(why);
+            break 'outer;
+        }
         for ev in events.drain(..) {
             match ev {
                 Event::Sample(s) => {

@@ -104,7 +104,7 @@ impl RunRequest {
         match &self.start {
             Start::Restart(dir) => {
                 let resume = Checkpoint::read(dir)?;
-                let scene = resume.scene()?;
+                let scene = resume.scene(dir)?;
                 let (model, plan) = model_and_plan(&scene)?;
                 let checkpointing = Checkpointing {
                     interval: resume.interval,
@@ -135,7 +135,10 @@ impl RunRequest {
                 out,
                 checkpoint_interval,
             } => {
-                let (scene, model, plan) = load(path, *end_time)?;
+                // The text is read once: the scene run and the one a checkpoint keeps are the
+                // same.
+                let text = Scene::read_text(path)?;
+                let (scene, model, plan) = load_text(&text, path, *end_time)?;
                 let out = out
                     .clone()
                     .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
@@ -151,13 +154,7 @@ impl RunRequest {
                     Some(t) => Some(Checkpointing {
                         interval: t,
                         scene_path: path.clone(),
-                        // Loaded just above, so readable and at most SCENE_MAX_BYTES.
-                        scene_text: std::fs::read_to_string(path).map_err(|source| {
-                            Error::Read {
-                                file: path.clone(),
-                                source,
-                            }
-                        })?,
+                        scene_text: text,
                         end_time_override: *end_time,
                     }),
                     None => None,
@@ -316,7 +313,12 @@ pub fn execute(
 /// As [`Scene::load`] and [`model_and_plan`]; [`Error::Invalid`] for an `end_time` that is not
 /// positive and finite (named `--end-time`).
 pub fn load(path: &Path, end_time: Option<f64>) -> Result<(Scene, Model, Plan)> {
-    let mut scene = Scene::load(path)?;
+    load_text(&Scene::read_text(path)?, path, end_time)
+}
+
+/// [`load`] of the scene text `text` read from `path`.
+fn load_text(text: &str, path: &Path, end_time: Option<f64>) -> Result<(Scene, Model, Plan)> {
+    let mut scene = Scene::parse(text, path)?;
     if let Some(t) = end_time {
         if !(t.is_finite() && t > 0.0) {
             return Err(Error::Invalid {

@@ -57,13 +57,7 @@ pub fn memory_estimate(scene: &Scene) -> u64 {
         .saturating_add(plastic)
 }
 
-/// The memory this machine has available (`MemAvailable` of `/proc/meminfo`), if known.
-pub fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
+pub use crate::input::available_memory;
 
 /// Refuses, before meshing, a scene whose estimated memory ([`memory_estimate`]) exceeds what
 /// the machine has available, naming the mesh key of its largest body.

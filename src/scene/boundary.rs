@@ -37,6 +37,7 @@ struct RawRegion {
     min: Option<[f64; 2]>,
     #[serde(default, deserialize_with = "fixed::option")]
     max: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "fixed::group")]
     group: Option<String>,
 }
 

@@ -25,6 +25,7 @@ pub(super) struct RawContact {
     self_contact: Option<bool>,
     penalty_scale: Option<f64>,
     penalty_stiffness: Option<String>,
+    #[serde(default, deserialize_with = "fixed::groups")]
     surfaces: Option<Vec<String>>,
     friction: Option<f64>,
     friction_stiffness: Option<f64>,

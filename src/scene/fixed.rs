@@ -80,3 +80,45 @@ where
         })
         .transpose()
 }
+
+/// A physical group of a Gmsh file as written: a name (`"clamp"`) or a number (`5` or `"5"`;
+/// Gmsh's tutorials number groups without naming them), as text.
+struct Group(String);
+
+impl<'de> Deserialize<'de> for Group {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = Group;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a physical group's name (a string) or number (an integer)")
+            }
+            fn visit_str<E: Error>(self, s: &str) -> Result<Group, E> {
+                Ok(Group(s.to_string()))
+            }
+            fn visit_i64<E: Error>(self, n: i64) -> Result<Group, E> {
+                Ok(Group(n.to_string()))
+            }
+            fn visit_u64<E: Error>(self, n: u64) -> Result<Group, E> {
+                Ok(Group(n.to_string()))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// `Option<String>` of a group name or number (with `#[serde(default)]`).
+pub fn group<'de, D>(d: D) -> Result<Option<String>, D::Error>
+where
+    D: Deserializer<'de>,
+{
+    Ok(Option::<Group>::deserialize(d)?.map(|g| g.0))
+}
+
+/// `Option<Vec<String>>` of group names or numbers (with `#[serde(default)]`).
+pub fn groups<'de, D>(d: D) -> Result<Option<Vec<String>>, D::Error>
+where
+    D: Deserializer<'de>,
+{
+    Ok(Option::<Vec<Group>>::deserialize(d)?.map(|v| v.into_iter().map(|g| g.0).collect()))
+}

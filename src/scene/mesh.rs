@@ -22,6 +22,7 @@ pub(super) struct RawMesh {
     #[serde(default, deserialize_with = "fixed::elements")]
     quads: Option<Vec<[i64; 4]>>,
     gmsh: Option<String>,
+    #[serde(default, deserialize_with = "fixed::group")]
     group: Option<String>,
 }
 

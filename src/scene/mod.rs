@@ -7,7 +7,8 @@
 //! (`[run]`), `material.rs` (`[[material]]`), `body.rs` (`[[body]]`) and `mesh.rs` (its
 //! `mesh`), `boundary.rs` (`[[boundary]]`, `[[pressure]]`, regions and load curves),
 //! `contact.rs` (`[[contact]]`, `[[rigid_wall]]`). `validate.rs` holds the validator and the
-//! checks the tables share, `fixed.rs` the strict fixed-length arrays. This module reads the
+//! checks the tables share, `fixed.rs` the strict fixed-length arrays; [`overrides`] sets keys
+//! by their path before the tables are decoded (what a study varies). This module reads the
 //! file, decodes its tables, has them validated in order and assembles the [`Scene`]; every
 //! public type is re-exported here. Host-side only, no GPU twin: the GPU reads the model built
 //! from a scene ([`crate::model`]).
@@ -24,6 +25,7 @@ mod contact;
 mod fixed;
 mod material;
 mod mesh;
+pub mod overrides;
 mod run;
 mod validate;
 
@@ -103,18 +105,28 @@ impl Scene {
 }
 
 impl Scene {
-    /// Reads and validates a scene file.
+    /// Reads and validates a scene file ([`Scene::read_text`], then [`Scene::parse`]).
     ///
     /// # Errors
     /// [`Error::Read`] when the file cannot be read, [`Error::Parse`] for TOML and shape errors
     /// (unknown keys included), [`Error::Invalid`] for values that are out of range.
     pub fn load(path: &Path) -> Result<Self> {
+        Self::parse(&Self::read_text(path)?, path)
+    }
+
+    /// The text of a scene file, at most [`SCENE_MAX_BYTES`] of it (a stream such as
+    /// `/dev/zero`, or a runaway file, is refused when the cap is reached, not read until memory
+    /// runs out; a pipe is read as a scene).
+    ///
+    /// # Errors
+    /// [`Error::Read`] when the file cannot be read, [`Error::Parse`] when it is larger than the
+    /// cap or not UTF-8 text.
+    pub fn read_text(path: &Path) -> Result<String> {
         use std::io::Read as _;
         let read_err = |source| Error::Read {
             file: path.to_path_buf(),
             source,
         };
-        // Bounded: `/dev/zero` or a runaway file is refused, not read until memory runs out.
         let mut bytes = Vec::new();
         std::fs::File::open(path)
             .and_then(|f| f.take(SCENE_MAX_BYTES + 1).read_to_end(&mut bytes))
@@ -128,11 +140,10 @@ impl Scene {
                 ),
             });
         }
-        let text = String::from_utf8(bytes).map_err(|e| Error::Parse {
+        String::from_utf8(bytes).map_err(|e| Error::Parse {
             file: path.to_path_buf(),
             message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
-        })?;
-        Self::parse(&text, path)
+        })
     }
 
     /// Parses and validates scene text; `path` is used for the name and in messages.
@@ -142,6 +153,21 @@ impl Scene {
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
         let raw = decode(text, path)?;
         Validator { file: path }.scene(raw)
+    }
+
+    /// Parses and validates scene text with keys overridden by their path
+    /// ([`overrides::materialise`], then [`Scene::parse`] of the text that gives): every check of
+    /// the scene applies to the overridden values. Without overrides, [`Scene::parse`].
+    ///
+    /// # Errors
+    /// As [`Scene::parse`], and [`Error::Invalid`] naming an override's key and value when it
+    /// cannot be set.
+    pub fn parse_with(text: &str, path: &Path, overrides: &[overrides::Override]) -> Result<Self> {
+        if overrides.is_empty() {
+            return Self::parse(text, path);
+        }
+        let text = overrides::materialise(text, path, overrides)?;
+        Self::parse(&text, path)
     }
 }
 

@@ -146,10 +146,11 @@ impl Validator<'_> {
         self.index_of(key, name, "body", bodies.iter().map(|b| b.name.as_str()))
     }
 
-    /// The physical group `name` of the Gmsh file `body` was read from, among those whose
-    /// dimension `dim_ok` accepts, with that file; at `key`, a body not read from a Gmsh file is
-    /// refused as `by_name` ("a region by name"), an unknown name as not one of `kind` ("physical
-    /// curve or point"), listing those there.
+    /// The physical group `name` (a name, or a number as text: `"5"`) of the Gmsh file `body`
+    /// was read from, among those whose dimension `dim_ok` accepts, with that file; by name
+    /// first, then by number (a curve before a point of the same number); at `key`, a body not
+    /// read from a Gmsh file is refused as `by_name` ("a region by name"), an unknown group as
+    /// not one of `kind` ("physical curve or point"), listing those there by name and number.
     pub(super) fn mesh_group<'b>(
         &self,
         key: &str,
@@ -171,15 +172,23 @@ impl Validator<'_> {
             ));
         };
         let in_kind = || mesh.groups.iter().filter(|g| dim_ok(g.dim));
-        let Some(g) = in_kind().find(|g| g.name == name) else {
-            let known: Vec<&str> = in_kind().map(|g| g.name.as_str()).collect();
+        let found = in_kind()
+            .find(|g| !g.name.is_empty() && g.name == name)
+            .or_else(|| in_kind().find(|g| g.is(name)));
+        let Some(g) = found else {
+            let known: Vec<String> = in_kind().map(|g| g.label()).collect();
             return Err(self.invalid(
                 key,
                 format!("{name:?}"),
                 &format!(
-                    "{} has no {kind} of that name on body {:?} (there: {known:?})",
+                    "{} has no {kind} of that name or number on body {:?} (there: {})",
                     file.display(),
-                    body.name
+                    body.name,
+                    if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known.join(", ")
+                    }
                 ),
             ));
         };

@@ -310,11 +310,20 @@ impl Case {
     /// Reads and checks a case file.
     ///
     /// # Errors
-    /// [`Error::Read`], [`Error::Parse`] or [`Error::Invalid`] naming the file and key.
+    /// [`Error::Parse`] when the file cannot be read (missing, not a regular file, over
+    /// [`crate::scene::SCENE_MAX_BYTES`]) or parsed, [`Error::Invalid`] naming the file and key.
     pub fn read(path: &Path) -> Result<Case> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+        let parse = |message: String| Error::Parse {
             file: path.to_path_buf(),
-            source,
+            message,
+        };
+        let bytes =
+            crate::input::read_capped(path, crate::scene::SCENE_MAX_BYTES).map_err(parse)?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            parse(format!(
+                "not UTF-8 text (byte {})",
+                e.utf8_error().valid_up_to()
+            ))
         })?;
         Self::parse(&text, path)
     }

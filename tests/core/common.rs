@@ -258,3 +258,32 @@ pub fn von_mises(s: [f64; 4]) -> f64 {
     (0.5 * ((sxx - syy).powi(2) + (syy - szz).powi(2) + (szz - sxx).powi(2) + 6.0 * sxy * sxy))
         .sqrt()
 }
+
+/// Runs the binary with `args` under a 4 GiB address-space limit (`ulimit -v`: a read that
+/// grows without bound fails there instead of exhausting the machine), killed after `secs`
+/// seconds; returns its output and whether it had to be killed.
+pub fn run_bin_bounded(args: &[&str], secs: u64) -> (Output, bool) {
+    use std::process::Stdio;
+    let mut child = Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 4194304; exec \"$0\" \"$@\"")
+        .arg(bin())
+        .args(args)
+        .env_remove("RUST_BACKTRACE")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("cannot start the ricochet binary");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(secs);
+    let mut killed = false;
+    while child.try_wait().expect("wait").is_none() {
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            killed = true;
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    (child.wait_with_output().expect("output"), killed)
+}

@@ -104,10 +104,10 @@ const ESCAPE_MARK: &str = "fuzz-esc";
 // ---------------------------------------------------------------------------------------------
 
 /// splitmix64.
-struct Rng(u64);
+pub(crate) struct Rng(pub(crate) u64);
 
 impl Rng {
-    fn next(&mut self) -> u64 {
+    pub(crate) fn next(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -116,12 +116,12 @@ impl Rng {
     }
 
     /// Uniform in 0..n (n > 0).
-    fn below(&mut self, n: usize) -> usize {
+    pub(crate) fn below(&mut self, n: usize) -> usize {
         (self.next() % n as u64) as usize
     }
 
     /// True with probability p.
-    fn chance(&mut self, p: f64) -> bool {
+    pub(crate) fn chance(&mut self, p: f64) -> bool {
         ((self.next() >> 11) as f64 / (1u64 << 53) as f64) < p
     }
 }
@@ -482,7 +482,7 @@ fn mutate(rng: &mut Rng, root: &mut Value) -> Option<String> {
 }
 
 /// A byte-level change of `bytes`.
-fn mutate_bytes(rng: &mut Rng, bytes: &mut Vec<u8>) -> String {
+pub(crate) fn mutate_bytes(rng: &mut Rng, bytes: &mut Vec<u8>) -> String {
     let at = rng.below(bytes.len() + 1);
     let b = rng.next() as u8;
     match rng.below(3) {
@@ -581,7 +581,7 @@ fn bases() -> Vec<(String, Value)> {
 
 /// How a case ended (when it broke no rule).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-enum Outcome {
+pub(crate) enum Outcome {
     /// `Scene::load` refused it (read, TOML or shape).
     Parse,
     /// `Scene::load` refused a value.
@@ -601,16 +601,23 @@ enum Outcome {
 }
 
 impl Outcome {
-    fn refused(self) -> bool {
+    pub(crate) fn refused(self) -> bool {
         self <= Outcome::Limits
     }
 }
 
-/// Checks a refusal's message: names the file, not empty, not too long.
-fn refused(outcome: Outcome, e: ricochet::Error, file: &Path) -> Result<Outcome, String> {
+/// Checks a refusal's message: names the file (the scene, or the mesh file `mesh` it reads),
+/// not empty, not too long.
+fn refused(
+    outcome: Outcome,
+    e: ricochet::Error,
+    file: &Path,
+    mesh: Option<&Path>,
+) -> Result<Outcome, String> {
     let msg = e.to_string();
     let name = file.display().to_string();
-    if msg.trim().is_empty() || !msg.contains(&name) || msg.len() > MAX_MESSAGE {
+    let named = msg.contains(&name) || mesh.is_some_and(|m| msg.contains(&*m.to_string_lossy()));
+    if msg.trim().is_empty() || !named || msg.len() > MAX_MESSAGE {
         let shown: String = msg.chars().take(2000).collect();
         return Err(format!(
             "{outcome:?} refusal with a bad message ({} bytes; must name {name} and have at most \
@@ -622,7 +629,7 @@ fn refused(outcome: Outcome, e: ricochet::Error, file: &Path) -> Result<Outcome,
 }
 
 /// The numbers of a JSON value that are not finite (`null`, as serde_json writes them).
-fn json_nulls(v: &serde_json::Value, path: &str, out: &mut Vec<String>) {
+pub(crate) fn json_nulls(v: &serde_json::Value, path: &str, out: &mut Vec<String>) {
     match v {
         serde_json::Value::Null => out.push(path.to_string()),
         serde_json::Value::Number(n) if !n.as_f64().is_some_and(f64::is_finite) => {
@@ -642,15 +649,18 @@ fn json_nulls(v: &serde_json::Value, path: &str, out: &mut Vec<String>) {
     }
 }
 
-/// The binary's load path and a short CPU run.
-fn run_case(file: &Path, out: &Path) -> Result<Outcome, String> {
+/// The binary's load path and a short CPU run of the scene `file` (whose refusal may name the
+/// mesh file `mesh` instead).
+pub(crate) fn run_case(file: &Path, mesh: Option<&Path>, out: &Path) -> Result<Outcome, String> {
     let mut scene = match Scene::load(file) {
         Ok(s) => s,
-        Err(e @ ricochet::Error::Invalid { .. }) => return refused(Outcome::Validation, e, file),
-        Err(e) => return refused(Outcome::Parse, e, file),
+        Err(e @ ricochet::Error::Invalid { .. }) => {
+            return refused(Outcome::Validation, e, file, mesh)
+        }
+        Err(e) => return refused(Outcome::Parse, e, file, mesh),
     };
     if let Err(e) = ricochet::run::check_memory(&scene) {
-        return refused(Outcome::Memory, e, file);
+        return refused(Outcome::Memory, e, file, mesh);
     }
     let elements: u64 = ricochet::run::element_counts(&scene).iter().sum();
     if elements > MAX_RUN_ELEMENTS || ricochet::run::memory_estimate(&scene) > MAX_RUN_BYTES {
@@ -658,10 +668,10 @@ fn run_case(file: &Path, out: &Path) -> Result<Outcome, String> {
     }
     let model = match ricochet::run::model(&scene) {
         Ok(m) => m,
-        Err(e) => return refused(Outcome::Model, e, file),
+        Err(e) => return refused(Outcome::Model, e, file, mesh),
     };
     if let Err(e) = ricochet::run::check_limits(&scene, &model) {
-        return refused(Outcome::Limits, e, file);
+        return refused(Outcome::Limits, e, file, mesh);
     }
     let plan = Plan::new(&scene, &model);
     let steps = (STEP_BUDGET / elements.max(1) as f64).clamp(20.0, 1000.0);
@@ -758,7 +768,7 @@ fn strays(root: &Path, case: &Path) -> Vec<PathBuf> {
 }
 
 /// Peak resident size of this process (bytes), from `VmHWM` of `/proc/self/status`.
-fn peak_rss() -> u64 {
+pub(crate) fn peak_rss() -> u64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
@@ -770,12 +780,12 @@ fn peak_rss() -> u64 {
 
 thread_local! {
     /// The last panic of this thread, with its location (set by the hook of [`install_hook`]).
-    static LAST_PANIC: RefCell<Option<String>> = const { RefCell::new(None) };
+    pub(crate) static LAST_PANIC: RefCell<Option<String>> = const { RefCell::new(None) };
 }
 
 /// A panic hook that records each panic's message and location for this thread, then calls
 /// the hook that was there before (so other tests' panics print as usual).
-fn install_hook() {
+pub(crate) fn install_hook() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         let prev = std::panic::take_hook();
@@ -787,14 +797,14 @@ fn install_hook() {
 }
 
 /// A thread that aborts the process when the current case runs longer than [`CASE_LIMIT`].
-struct Watchdog {
+pub(crate) struct Watchdog {
     current: Arc<Mutex<Option<(Instant, String)>>>,
     stop: Arc<AtomicBool>,
     thread: Option<std::thread::JoinHandle<()>>,
 }
 
 impl Watchdog {
-    fn start() -> Self {
+    pub(crate) fn start() -> Self {
         let current: Arc<Mutex<Option<(Instant, String)>>> = Arc::new(Mutex::new(None));
         let stop = Arc::new(AtomicBool::new(false));
         let (c, s) = (Arc::clone(&current), Arc::clone(&stop));
@@ -823,7 +833,7 @@ impl Watchdog {
         }
     }
 
-    fn watch(&self, what: Option<String>) {
+    pub(crate) fn watch(&self, what: Option<String>) {
         *self.current.lock().unwrap_or_else(|e| e.into_inner()) = what.map(|w| (Instant::now(), w));
     }
 }
@@ -911,7 +921,7 @@ fn mutated_scenes_never_panic_hang_escape_or_complete_with_non_finite_numbers() 
         let out = dir.join("out");
         watchdog.watch(Some(mutant.describe(case)));
         let t0 = Instant::now();
-        let result = catch_unwind(AssertUnwindSafe(|| run_case(&file, &out)));
+        let result = catch_unwind(AssertUnwindSafe(|| run_case(&file, None, &out)));
         let result = match result {
             Ok(r) => r,
             Err(payload) => {

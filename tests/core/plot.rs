@@ -308,3 +308,33 @@ fn plot_refuses_folders_that_are_not_a_run_and_fields_it_did_not_write() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("no field pictures"));
     assert!(no_fields.join("plots/energies.png").exists());
 }
+
+#[test]
+fn plot_reads_are_bounded_before_they_happen() {
+    // An output file replaced by an endless stream (issue 40: every file the program reads is
+    // read within a cap decided before the read): refused naming it, never read until memory
+    // runs out.
+    let out = tmp_dir("plot-streams");
+    run_scene("assets/vibrating_block.toml", &out, &["--end-time", "4e-5"]);
+    let mut vtus: Vec<String> = std::fs::read_dir(out.join("fields"))
+        .expect("fields/")
+        .map(|e| format!("fields/{}", e.unwrap().file_name().to_string_lossy()))
+        .collect();
+    vtus.sort();
+    for f in ["history.csv", vtus[0].as_str()] {
+        let saved = std::fs::read(out.join(f)).expect("output file");
+        std::fs::remove_file(out.join(f)).unwrap();
+        std::os::unix::fs::symlink("/dev/zero", out.join(f)).unwrap();
+        let (o, killed) = run_bin_bounded(&["plot", &out.to_string_lossy()], 60);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!killed, "plot read {f} without bound");
+        assert_eq!(o.status.code(), Some(2), "{f}: {err}");
+        // Named as missing (plot looks for regular files) or as not a regular file.
+        assert!(
+            err.contains(f) && (err.contains("not a regular file") || err.contains("missing")),
+            "{err}"
+        );
+        std::fs::remove_file(out.join(f)).unwrap();
+        std::fs::write(out.join(f), saved).unwrap();
+    }
+}

@@ -262,6 +262,14 @@ impl GpuState {
         // Time, step, dt, the five energies, the plastic work with a plastic body, then per body.
         let row_stride = 9 + u32::from(plastic) + 2 * nb as u32;
         let row_cap = row_capacity(row_stride, device.limits().max_storage_buffer_binding_size);
+        if ticks_per_end(schedule.end_time) < MIN_TICKS_PER_END {
+            return Err(Error::Gpu(format!(
+                "run.end_time = {:e} s is too short for the GPU, which keeps time in f32 ticks \
+                 (an end time of at least {:e} s); run it with --backend cpu",
+                schedule.end_time,
+                MIN_TICKS_PER_END / MAX_TICKS_PER_SECOND
+            )));
+        }
         let [end_lo, end_hi] = ticks(schedule.end_time, schedule.end_time);
         let params = Params {
             n_nodes: nn as u32,
@@ -279,7 +287,7 @@ impl GpuState {
             dt_groups: if fused { 0 } else { reduce::groups(ne, rg) },
             n_instances: instances.len() as u32,
             sum_groups,
-            ticks_per_second: (TICKS_PER_END / schedule.end_time) as f32,
+            ticks_per_second: (ticks_per_end(schedule.end_time) / schedule.end_time) as f32,
             penalty_dt: contact_set
                 .as_ref()
                 .and_then(|c| c.penalty_step())

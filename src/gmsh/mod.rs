@@ -1,18 +1,30 @@
-//! Gmsh meshes: the elements of one physical surface of an MSH 4.1 file (ASCII or binary), read
-//! with the `mshio` crate, as a body's nodes and counter-clockwise quads and triangles (a
-//! triangle as the collapsed quad `[a, b, c, c]`, see [`crate::element`]). `mshio` reads the
-//! entities, nodes and elements; the names of the physical groups (`$PhysicalNames`) are read
-//! here. Every problem is reported as a sentence naming the group and, for an element, its Gmsh
-//! tag and nodes; the scene parser puts it in an [`crate::Error::Invalid`] with the scene file,
-//! the key and the mesh file.
+//! Gmsh meshes: the elements of one physical surface of an MSH 4.1 file (ASCII or binary) as a
+//! body's nodes and counter-clockwise quads and triangles (a triangle as the collapsed quad
+//! `[a, b, c, c]`, see [`crate::element`]), and the file's physical curves and points on that
+//! body. The file is read whole within [`MAX_FILE_BYTES`] ([`read_bytes`]) and its sections by
+//! `msh.rs`, which checks every count and tag it gives (nodes are found by their tags, which
+//! must be unique and within the `$Nodes` header's range). A physical group is found by its
+//! name in `$PhysicalNames` or by its number (`5` or `"5"`: Gmsh's tutorials number groups
+//! without naming them). Every problem is reported as a sentence naming the group and, for an
+//! element, its Gmsh tag and nodes; the scene parser puts it in an [`crate::Error::Invalid`]
+//! with the scene file, the key and the mesh file. Host-side only, no GPU twin.
+
+mod msh;
 
 use std::collections::{BTreeSet, HashMap, HashSet};
 use std::path::Path;
 
-use mshio::mshfile::ElementType;
+pub use msh::type_name;
 
 /// Mesh files larger than this are refused before they are read (no unbounded allocation).
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
+
+/// Gmsh element types read as elements: 3-node triangles and 4-node quads.
+const TRI3: i32 = 2;
+const QUA4: i32 = 3;
+/// Gmsh element types read as boundaries: 2-node lines and points.
+const LIN2: i32 = 1;
+const PNT: i32 = 15;
 
 /// The elements of one physical surface, ready to be a body.
 #[derive(Debug, Clone, PartialEq)]
@@ -30,13 +42,18 @@ pub struct SurfaceMesh {
     /// The physical curves and points of the file that touch this surface, as node sets and
     /// edges of this surface's nodes (for `region = { group = "..." }`).
     pub groups: Vec<NodeGroup>,
+    /// The digest ([`digest`]) of the whole file the surface was read from: a checkpoint keeps
+    /// it, and a restart refuses a mesh file that changed since.
+    pub digest: u64,
 }
 
 /// A physical curve or point of a mesh file, restricted to one surface's nodes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NodeGroup {
-    /// Its name in `$PhysicalNames`.
+    /// Its name in `$PhysicalNames` (empty for a group that has only a number).
     pub name: String,
+    /// Its physical tag (number).
+    pub tag: i32,
     /// 1 for a curve, 0 for a point.
     pub dim: i32,
     /// Indices into [`SurfaceMesh::nodes`], ascending.
@@ -44,6 +61,32 @@ pub struct NodeGroup {
     /// The curve's 2-node line elements whose two nodes are in the surface, as indices into
     /// [`SurfaceMesh::nodes`] (none for a point).
     pub edges: Vec<[u32; 2]>,
+}
+
+impl NodeGroup {
+    /// Whether `group` (a name, or a number as text) names this group: by its name, else by its
+    /// number ([`group_number`]).
+    pub fn is(&self, group: &str) -> bool {
+        (!self.name.is_empty() && self.name == group) || group_number(group) == Some(self.tag)
+    }
+
+    /// The group as a message lists it: `"clamp" (5)`, or `5` without a name.
+    pub fn label(&self) -> String {
+        label(&self.name, self.tag)
+    }
+}
+
+fn label(name: &str, tag: i32) -> String {
+    if name.is_empty() {
+        tag.to_string()
+    } else {
+        format!("{name:?} ({tag})")
+    }
+}
+
+/// The physical tag that `group` gives as a number (`"5"`): a positive integer, else `None`.
+pub fn group_number(group: &str) -> Option<i32> {
+    group.parse::<i32>().ok().filter(|&n| n > 0)
 }
 
 /// A physical group named in `$PhysicalNames`.
@@ -86,6 +129,12 @@ impl SurfaceMesh {
     }
 }
 
+/// The digest of a file's bytes (64-bit XXH3): what a checkpoint keeps of a mesh file, to find
+/// it changed at a restart.
+pub fn digest(bytes: &[u8]) -> u64 {
+    xxhash_rust::xxh3::xxh3_64(bytes)
+}
+
 fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
     haystack.windows(needle.len()).position(|w| w == needle)
 }
@@ -112,7 +161,7 @@ pub fn version(bytes: &[u8]) -> Result<String, String> {
         .and_then(|l| std::str::from_utf8(l).ok())
         .and_then(|l| l.split_whitespace().next())
         .ok_or("its $MeshFormat section has no version")?;
-    Ok(v.to_string())
+    Ok(v.chars().take(40).collect())
 }
 
 /// The physical groups named in `$PhysicalNames` (none when the section is absent).
@@ -123,33 +172,10 @@ pub fn physical_names(bytes: &[u8]) -> Result<Vec<PhysicalName>, String> {
     let Some(s) = section(bytes, "PhysicalNames") else {
         return Ok(Vec::new());
     };
-    let text = std::str::from_utf8(s).map_err(|_| "its $PhysicalNames section is not text")?;
-    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
-    let count: usize = lines
-        .next()
-        .and_then(|l| l.parse().ok())
-        .ok_or("its $PhysicalNames section does not start with a count")?;
-    let mut out = Vec::new();
-    for line in lines {
-        let mut parts = line.splitn(3, char::is_whitespace);
-        let bad = || format!("malformed $PhysicalNames line `{line}`");
-        let dim: i32 = parts.next().and_then(|p| p.parse().ok()).ok_or_else(bad)?;
-        let tag: i32 = parts.next().and_then(|p| p.parse().ok()).ok_or_else(bad)?;
-        let name = parts
-            .next()
-            .ok_or_else(bad)?
-            .trim()
-            .trim_matches('"')
-            .to_string();
-        out.push(PhysicalName { dim, tag, name });
-    }
-    if out.len() != count {
-        return Err(format!(
-            "its $PhysicalNames section announces {count} names and has {}",
-            out.len()
-        ));
-    }
-    Ok(out)
+    Ok(msh::physical_names(s)?
+        .into_iter()
+        .map(|(dim, tag, name)| PhysicalName { dim, tag, name })
+        .collect())
 }
 
 fn dim_word(dim: i32) -> &'static str {
@@ -161,29 +187,52 @@ fn dim_word(dim: i32) -> &'static str {
     }
 }
 
-/// The file's bytes, refusing what cannot be a mesh file this program should read whole.
+/// The file's bytes, refusing what cannot be a mesh file this program should read whole:
+/// anything but a regular file (a FIFO, `/dev/zero`, a folder) before it is opened, a file over
+/// [`MAX_FILE_BYTES`] (checked on its size, and again on what is read, through
+/// [`std::io::Read::take`]).
 ///
 /// # Errors
-/// A sentence when the file cannot be read or is larger than [`MAX_FILE_BYTES`].
+/// A sentence when the file cannot be read, is not a regular file or is larger than
+/// [`MAX_FILE_BYTES`].
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>, String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read the mesh file: {e}"))?;
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(format!(
-            "the mesh file has {} bytes, more than the {} MiB read at most",
-            meta.len(),
-            MAX_FILE_BYTES >> 20
-        ));
-    }
-    std::fs::read(path).map_err(|e| format!("cannot read the mesh file: {e}"))
+    crate::input::read_capped(path, MAX_FILE_BYTES)
+        .map_err(|e| format!("cannot read the mesh file: {e}"))
 }
 
-/// The quads and triangles of physical surface `group` of the MSH 4.1 file `bytes`.
+/// The physical groups of dimension `dim` of `file`: (tag, name), the named ones first in the
+/// order of `$PhysicalNames`, then those that only entities number, ascending (empty names).
+fn groups_of(file: &msh::MshFile, dim: i32) -> Vec<(i32, String)> {
+    let mut out: Vec<(i32, String)> = file
+        .names
+        .iter()
+        .filter(|n| n.0 == dim)
+        .map(|n| (n.1, n.2.clone()))
+        .collect();
+    let mut numbered: BTreeSet<i32> = BTreeSet::new();
+    if let Some(list) = file.entities.get(dim as usize) {
+        for e in list {
+            numbered.extend(e.physical.iter().map(|p| p.abs()));
+        }
+    }
+    for t in numbered {
+        if !out.iter().any(|o| o.0 == t) {
+            out.push((t, String::new()));
+        }
+    }
+    out
+}
+
+/// The quads and triangles of physical surface `group` (its name, or its number as text) of the
+/// MSH 4.1 file `bytes`.
 ///
 /// # Errors
-/// A sentence naming the group and the problem: another MSH version, a group that does not
-/// exist or is not a surface, elements other than 4-node quads and 3-node triangles in it (type
-/// and count), a node off the xy-plane, an element whose corners do not make a convex element of
-/// positive area (its Gmsh tag and nodes).
+/// A sentence naming the group and the problem: another MSH version, a file `msh.rs` refuses
+/// (a bad header, a count larger than the file, a node tag that is 0, out of range or given
+/// twice), a group that does not exist (the message lists the file's surfaces by name and
+/// number) or is not a surface, elements other than 4-node quads and 3-node triangles in it
+/// (type and count), a node off the xy-plane, an element whose corners do not make a convex
+/// element of positive area (its Gmsh tag and nodes).
 pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
     let v = version(bytes)?;
     if v != "4.1" {
@@ -192,91 +241,75 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
              Mesh.MshFileVersion = 4.1, or `gmsh -format msh41`)"
         ));
     }
-    let names = physical_names(bytes)?;
-    let tag = match names.iter().find(|n| n.name == group && n.dim == 2) {
-        Some(n) => n.tag,
+    let file = msh::parse(bytes)?;
+    let surfaces = groups_of(&file, 2);
+    let by_name = |list: &[(i32, String)]| {
+        list.iter()
+            .find(|g| !g.1.is_empty() && g.1 == group)
+            .or_else(|| list.iter().find(|g| Some(g.0) == group_number(group)))
+            .map(|g| g.0)
+    };
+    let tag = match by_name(&surfaces) {
+        Some(t) => t,
         None => {
-            if let Some(n) = names.iter().find(|n| n.name == group) {
-                return Err(format!(
-                    "group `{group}` is a physical {}, not a surface: a body is the elements \
-                     of a physical surface",
-                    dim_word(n.dim)
-                ));
+            for dim in [1, 0, 3] {
+                if by_name(&groups_of(&file, dim)).is_some() {
+                    return Err(format!(
+                        "group `{group}` is a physical {}, not a surface: a body is the \
+                         elements of a physical surface",
+                        dim_word(dim)
+                    ));
+                }
             }
-            let surfaces: Vec<&str> = names
-                .iter()
-                .filter(|n| n.dim == 2)
-                .map(|n| n.name.as_str())
-                .collect();
+            let listed: Vec<String> = surfaces.iter().map(|g| label(&g.1, g.0)).collect();
+            let how = if group_number(group).is_some() {
+                "named or numbered"
+            } else {
+                "named"
+            };
             return Err(format!(
-                "no physical surface named `{group}` (the file names {})",
-                if surfaces.is_empty() {
+                "no physical surface {how} `{group}` (the file's surfaces by name and number: {})",
+                if listed.is_empty() {
                     "none".to_string()
                 } else {
-                    surfaces.join(", ")
+                    listed.join(", ")
                 }
             ));
         }
     };
-    let msh = mshio::parse_msh_bytes(bytes).map_err(|e| {
-        let full = format!("{e}");
-        let short: String = full.lines().take(4).collect::<Vec<_>>().join("; ");
-        format!("not a readable MSH 4.1 file: {short}")
-    })?;
-    let data = &msh.data;
-    let entities: HashSet<i32> = data
-        .entities
-        .as_ref()
-        .map(|e| {
-            e.surfaces
-                .iter()
-                .filter(|s| s.physical_tags.iter().any(|&p| p.abs() == tag))
-                .map(|s| s.tag)
-                .collect()
-        })
-        .unwrap_or_default();
+    let entities: HashSet<i32> = file.entities[2]
+        .iter()
+        .filter(|s| s.physical.iter().any(|&p| p.abs() == tag))
+        .map(|s| s.tag)
+        .collect();
     if entities.is_empty() {
         return Err(format!(
             "group `{group}` (physical tag {tag}) holds no surface of the file's $Entities"
         ));
     }
     let mut raw: Vec<(u64, [u64; 4])> = Vec::new();
-    let mut other: Vec<(ElementType, usize)> = Vec::new();
-    if let Some(el) = &data.elements {
-        for b in &el.element_blocks {
-            if b.entity_dim != 2 || !entities.contains(&b.entity_tag) {
-                continue;
+    let mut other: Vec<(i32, usize)> = Vec::new();
+    for b in &file.elements {
+        if b.dim != 2 || !entities.contains(&b.entity) {
+            continue;
+        }
+        if b.kind == QUA4 || b.kind == TRI3 {
+            for (k, &etag) in b.tags.iter().enumerate() {
+                let n = &b.nodes[k * b.per..(k + 1) * b.per];
+                // A triangle is a collapsed quad [a, b, c, c] (see ricochet::element).
+                raw.push((etag, [n[0], n[1], n[2], n[b.per - 1]]));
             }
-            let corners = match b.element_type {
-                ElementType::Qua4 => 4,
-                ElementType::Tri3 => 3,
-                _ => 0,
-            };
-            if corners > 0 {
-                for e in &b.elements {
-                    let n = e.nodes.as_slice();
-                    if n.len() != corners {
-                        return Err(format!(
-                            "element {} of group `{group}` has {} nodes, not {corners}",
-                            e.element_tag,
-                            n.len()
-                        ));
-                    }
-                    // A triangle is a collapsed quad [a, b, c, c] (see ricochet::element).
-                    raw.push((e.element_tag, [n[0], n[1], n[2], n[corners - 1]]));
-                }
-            } else {
-                match other.iter_mut().find(|o| o.0 == b.element_type) {
-                    Some(o) => o.1 += b.elements.len(),
-                    None => other.push((b.element_type, b.elements.len())),
-                }
+        } else {
+            match other.iter_mut().find(|o| o.0 == b.kind) {
+                Some(o) => o.1 += b.tags.len(),
+                None => other.push((b.kind, b.tags.len())),
             }
         }
     }
     if !other.is_empty() {
         let list: Vec<String> = other
             .iter()
-            .map(|(t, n)| format!("{n} x {t:?} (Gmsh type {})", *t as u8))
+            .map(|(t, n)| format!("{n} x {} (Gmsh type {t})", type_name(*t)))
             .collect();
         let hint = "ricochet reads first-order elements, 4-node quads and 3-node triangles \
                     (Mesh.ElementOrder = 1)";
@@ -290,27 +323,10 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
             "group `{group}` has no elements (was the mesh generated?)"
         ));
     }
-    // Node coordinates by tag. Dense tags are not kept by mshio: they run from the smallest tag
-    // in the order the blocks are written, which is how Gmsh writes them.
+    // Node coordinates by tag (each tag once: `msh.rs` refuses a tag given twice).
     let mut coords: HashMap<u64, [f64; 3]> = HashMap::new();
-    if let Some(nodes) = &data.nodes {
-        let mut next = nodes.min_node_tag;
-        for b in &nodes.node_blocks {
-            match &b.node_tags {
-                Some(map) => {
-                    for (&t, &i) in map {
-                        let p = &b.nodes[i];
-                        coords.insert(t, [p.x, p.y, p.z]);
-                    }
-                }
-                None => {
-                    for p in &b.nodes {
-                        coords.insert(next, [p.x, p.y, p.z]);
-                        next += 1;
-                    }
-                }
-            }
-        }
+    for b in &file.nodes {
+        coords.extend(b.tags.iter().copied().zip(b.coords.iter().copied()));
     }
     let used: BTreeSet<u64> = raw.iter().flat_map(|(_, q)| q.iter().copied()).collect();
     let mut index = HashMap::with_capacity(used.len());
@@ -390,7 +406,7 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
         quads.push(l);
         element_tags.push(*etag);
     }
-    let groups = node_groups(data, &names, &index);
+    let groups = node_groups(&file, &index);
     Ok(SurfaceMesh {
         nodes,
         node_tags,
@@ -398,71 +414,52 @@ pub fn read_surface(bytes: &[u8], group: &str) -> Result<SurfaceMesh, String> {
         element_tags,
         reoriented,
         groups,
+        digest: digest(bytes),
     })
 }
 
-/// The physical curves and points of the file restricted to the nodes in `index` (Gmsh tag to
-/// surface index): the nodes of their 2-node lines and points, and the lines with both nodes in.
-fn node_groups(
-    data: &mshio::mshfile::MshData<u64, i32, f64>,
-    names: &[PhysicalName],
-    index: &HashMap<u64, u32>,
-) -> Vec<NodeGroup> {
-    let Some(entities) = &data.entities else {
-        return Vec::new();
-    };
-    let Some(elements) = &data.elements else {
-        return Vec::new();
-    };
+/// The physical curves and points of the file (named or only numbered) restricted to the nodes
+/// in `index` (Gmsh tag to surface index): the nodes of their 2-node lines and points, and the
+/// lines with both nodes in.
+fn node_groups(file: &msh::MshFile, index: &HashMap<u64, u32>) -> Vec<NodeGroup> {
     let mut out = Vec::new();
-    for n in names.iter().filter(|n| n.dim == 0 || n.dim == 1) {
-        // The points or curves of the physical group.
-        let member =
-            |tag: i32, physical: &[i32]| physical.iter().any(|&p| p.abs() == n.tag).then_some(tag);
-        let tags: HashSet<i32> = if n.dim == 0 {
-            entities
-                .points
+    for dim in [1, 0] {
+        for (tag, name) in groups_of(file, dim) {
+            // The points or curves of the physical group.
+            let tags: HashSet<i32> = file.entities[dim as usize]
                 .iter()
-                .filter_map(|e| member(e.tag, &e.physical_tags))
-                .collect()
-        } else {
-            entities
-                .curves
-                .iter()
-                .filter_map(|e| member(e.tag, &e.physical_tags))
-                .collect()
-        };
-        let mut nodes = BTreeSet::new();
-        let mut edges = Vec::new();
-        for b in &elements.element_blocks {
-            if b.entity_dim != n.dim || !tags.contains(&b.entity_tag) {
-                continue;
-            }
-            for e in &b.elements {
-                let local: Vec<u32> = e
-                    .nodes
-                    .iter()
-                    .filter_map(|t| index.get(t).copied())
-                    .collect();
-                match b.element_type {
-                    ElementType::Lin2 if local.len() == 2 => {
-                        edges.push([local[0], local[1]]);
-                        nodes.extend(local);
+                .filter(|e| e.physical.iter().any(|&p| p.abs() == tag))
+                .map(|e| e.tag)
+                .collect();
+            let mut nodes = BTreeSet::new();
+            let mut edges = Vec::new();
+            for b in &file.elements {
+                if b.dim != dim || !tags.contains(&b.entity) {
+                    continue;
+                }
+                for e in b.nodes.chunks(b.per) {
+                    let local: Vec<u32> = e.iter().filter_map(|t| index.get(t).copied()).collect();
+                    match b.kind {
+                        LIN2 if local.len() == 2 => {
+                            edges.push([local[0], local[1]]);
+                            nodes.extend(local);
+                        }
+                        PNT if local.len() == 1 => {
+                            nodes.extend(local);
+                        }
+                        _ => {}
                     }
-                    ElementType::Pnt if local.len() == 1 => {
-                        nodes.extend(local);
-                    }
-                    _ => {}
                 }
             }
-        }
-        if !nodes.is_empty() {
-            out.push(NodeGroup {
-                name: n.name.clone(),
-                dim: n.dim,
-                nodes: nodes.into_iter().collect(),
-                edges,
-            });
+            if !nodes.is_empty() {
+                out.push(NodeGroup {
+                    name,
+                    tag,
+                    dim,
+                    nodes: nodes.into_iter().collect(),
+                    edges,
+                });
+            }
         }
     }
     out
