@@ -5,7 +5,9 @@
 
 use super::{warm_key, Constraint, ContactSet};
 
-/// Projected Gauss-Seidel sweeps at most per step.
+/// Projected Gauss-Seidel sweeps at most per solve: the sweeps of a step before its first
+/// active-set re-check, and those after each re-check that adds constraints (so at most
+/// (1 + [`ACTIVE_SET_ROUNDS`]) x this a step).
 pub const MAX_SWEEPS: usize = 500;
 /// Sweeps stop when no gap changes by more than this fraction of the search margin.
 pub const SWEEP_TOLERANCE: f64 = 1e-13;
@@ -54,8 +56,13 @@ pub struct SweepStats {
     pub max: u64,
     /// Steps with Lagrange constraints.
     pub steps: u64,
-    /// Solves that reached [`MAX_SWEEPS`] (the last sweep ran, converged or not).
+    /// Steps whose residual stayed above [`SWEEP_TOLERANCE`] (their last solve stopped at
+    /// [`MAX_SWEEPS`]).
     pub unconverged: u64,
+    /// The largest residual of a step: the largest change of a gap (or tangential slip) in its
+    /// last sweep, over the search margin.
+    #[serde(default)]
+    pub residual_max: f64,
 }
 
 impl SweepStats {
@@ -189,7 +196,7 @@ impl ContactSet {
         }
         if self.cons.len() > n_pen {
             self.sweep_stats.step = 0;
-            self.sweep();
+            let mut residual = self.sweep();
             // Active-set update: the sweeps move master nodes, which can carry a segment onto
             // a slave node that was free at the trial positions (a node beside a dent, or at
             // a kink, whose neighbours are pushed back). Such a node would end the step inside
@@ -201,9 +208,14 @@ impl ContactSet {
                 if self.cons.len() == before {
                     break;
                 }
-                self.sweep();
+                residual = self.sweep();
             }
+            let residual = residual / self.margin.max(f64::MIN_POSITIVE);
             let s = &mut self.sweep_stats;
+            s.residual_max = s.residual_max.max(residual);
+            if residual > SWEEP_TOLERANCE {
+                s.unconverged += 1;
+            }
             s.total += s.step;
             s.max = s.max.max(s.step);
             s.steps += 1;
@@ -220,8 +232,9 @@ impl ContactSet {
 
     /// Projected Gauss-Seidel sweeps over the Lagrange constraints, in their fixed order, until
     /// the largest change of a gap is below [`SWEEP_TOLERANCE`] x margin or [`MAX_SWEEPS`];
-    /// extrapolated between sweeps (see [`extrapolation`]) unless `plain_sweeps`.
-    pub(super) fn sweep(&mut self) {
+    /// extrapolated between sweeps (see [`extrapolation`]) unless `plain_sweeps`; returns the
+    /// last sweep's largest change of a gap (m), the step's residual when it is its last solve.
+    pub(super) fn sweep(&mut self) -> f64 {
         let tol = SWEEP_TOLERANCE * self.margin.max(f64::MIN_POSITIVE);
         let dt = self.dt;
         let extrapolate = !self.plain_sweeps;
@@ -233,9 +246,6 @@ impl ContactSet {
         let mut last = f64::INFINITY;
         for sweep in 0..MAX_SWEEPS {
             self.sweep_stats.step += 1;
-            if sweep + 1 == MAX_SWEEPS {
-                self.sweep_stats.unconverged += 1;
-            }
             // (At the start of a run, before sweep 0 and the first sweep after a restart, the
             // values kept would not be used: the next factor is 0 as well, and its call keeps
             // them again.)
@@ -283,6 +293,7 @@ impl ContactSet {
                 break;
             }
         }
+        last
     }
 
     /// The nodes of the Lagrange constraints, each once in constraint order, into `touched`.

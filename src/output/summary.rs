@@ -51,8 +51,14 @@ pub struct Summary {
     pub contact_sweeps_mean: f64,
     /// See `contact_sweeps_mean`.
     pub contact_sweeps_max: u64,
-    /// Lagrange contact: steps whose sweeps stopped at the sweep limit before the tolerance.
+    /// Lagrange contact: steps whose residual stayed above the tolerance (their sweeps stopped
+    /// at the sweep limit): `contact::SWEEP_TOLERANCE` on the CPU, `gpu::contact::solve::TOLERANCE`
+    /// on the GPU.
     pub contact_unconverged: u64,
+    /// Lagrange contact: the largest residual of a step, the largest change of a gap (or of a
+    /// tangential slip) in the step's last sweep over the search margin (0 without); `None`
+    /// (`null` in `summary.json`) where the backend does not measure it (the GPU, for now).
+    pub contact_residual_max: Option<f64>,
     /// Penalty contact: impulses bounded by the perfectly plastic impulse (constraint-steps
     /// whose spring was too stiff for the step, (omega dt)^2 > 1): the spring energy they kept
     /// stays in `contact_energy` after release. 0: every spring acted unchanged.

@@ -396,6 +396,7 @@ fn summary_now(
         contact_sweeps_mean: counters.contact_sweeps_mean,
         contact_sweeps_max: counters.contact_sweeps_max,
         contact_unconverged: counters.contact_unconverged,
+        contact_residual_max: (solver.backend() == "cpu").then_some(counters.contact_residual_max),
         contact_penalty_bounded: counters.contact_penalty_bounded,
         stage_seconds: solver.stage_seconds(),
         history_rows,

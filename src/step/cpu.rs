@@ -722,6 +722,7 @@ impl Solver for CpuSolver {
             contact_sweeps_mean: s.mean(),
             contact_sweeps_max: s.max,
             contact_unconverged: s.unconverged,
+            contact_residual_max: s.residual_max,
             contact_penalty_bounded: self.s.contact.as_ref().map_or(0, |c| c.penalty_bounded()),
             ..Default::default()
         }

@@ -241,8 +241,13 @@ pub struct Counters {
     pub contact_sweeps_mean: f64,
     /// See `contact_sweeps_mean`.
     pub contact_sweeps_max: u64,
-    /// Lagrange contact: steps whose sweeps stopped at the sweep limit before the tolerance.
+    /// Lagrange contact: steps whose residual stayed above the tolerance (their sweeps
+    /// stopped at the sweep limit).
     pub contact_unconverged: u64,
+    /// Lagrange contact: the largest residual of a step (the largest change of a gap in its
+    /// last sweep over the search margin; 0 without).
+    #[serde(default)]
+    pub contact_residual_max: f64,
     /// Penalty contact: impulses bounded by the perfectly plastic impulse (constraint-steps with
     /// a spring too stiff for the step; the energy they keep is lost).
     pub contact_penalty_bounded: u64,

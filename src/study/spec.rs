@@ -25,7 +25,7 @@ pub const MAX_CASES: usize = 100_000;
 pub const NAME_MAX: usize = 64;
 
 /// The numbers of `summary.json` a `[[collect]]` table may name with `summary = "..."`.
-pub const SUMMARY_NUMBERS: [&str; 18] = [
+pub const SUMMARY_NUMBERS: [&str; 19] = [
     "nodes",
     "elements",
     "steps",
@@ -42,6 +42,7 @@ pub const SUMMARY_NUMBERS: [&str; 18] = [
     "contact_sweeps_mean",
     "contact_sweeps_max",
     "contact_unconverged",
+    "contact_residual_max",
     "contact_penalty_bounded",
     "history_rows",
 ];
