@@ -35,10 +35,7 @@ fn prescribed(v: f32, curve: u32, t: f32) -> f32 {
 @compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (k >= params.n_cons) {
-        return;
-    }
-    if (ctrl.state != STATE_RUNNING) {
+    if (k >= params.n_cons || ctrl.state != STATE_RUNNING) {
         return;
     }
     let c = cons[k];
@@ -58,29 +55,23 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // On the first step the update is a half step: the reaction's share in
     // M (v^{1/2} - v^{-1/2}) = dt f_0 + 2 j is 2 j (as on the CPU).
     let jw = select(1.0, 2.0, first) * mr;
-    if ((c.mask & 1u) != 0u) {
-        let vn = prescribed(c.vx, c.curve_x, t_new);
-        let vo = select(prescribed(c.vx, c.curve_x, t_old), 2.0 * prescribed(c.vx, c.curve_x, t) - vn, first);
-        let j = jw * (vn - s.z);
+    // Each prescribed direction a (x, then y): s[a] is u, s[2 + a] is v.
+    let value = vec2<f32>(c.vx, c.vy);
+    let curve = vec2<u32>(c.curve_x, c.curve_y);
+    for (var a = 0u; a < 2u; a++) {
+        if ((c.mask & (1u << a)) == 0u) {
+            continue;
+        }
+        let vn = prescribed(value[a], curve[a], t_new);
+        let vo = select(prescribed(value[a], curve[a], t_old), 2.0 * prescribed(value[a], curve[a], t) - vn, first);
+        let j = jw * (vn - s[2u + a]);
         work += 0.5 * j * (vo + vn);
         after += j * vn;
         if (move_u) {
-            s.x += dt * (vn - s.z);
+            s[a] += dt * (vn - s[2u + a]);
         }
-        s.z = vn;
-        vp.x = vo;
-    }
-    if ((c.mask & 2u) != 0u) {
-        let vn = prescribed(c.vy, c.curve_y, t_new);
-        let vo = select(prescribed(c.vy, c.curve_y, t_old), 2.0 * prescribed(c.vy, c.curve_y, t) - vn, first);
-        let j = jw * (vn - s.w);
-        work += 0.5 * j * (vo + vn);
-        after += j * vn;
-        if (move_u) {
-            s.y += dt * (vn - s.w);
-        }
-        s.w = vn;
-        vp.y = vo;
+        s[2u + a] = vn;
+        vp[a] = vo;
     }
     nodes[c.node] = s;
     if ((flags & (FLAG_SAMPLE | FLAG_SNAPSHOT)) != 0u) {

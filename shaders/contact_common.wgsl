@@ -1,7 +1,10 @@
 // Shared declarations of the contact kernels (prepended after common.wgsl to each contact stage:
-// contact_search.wgsl, contact_narrow.wgsl, contact_solve.wgsl, contact_report.wgsl). Every
+// contact_search.wgsl, contact_narrow.wgsl, contact_solve.wgsl, contact_report.wgsl,
+// contact_one.wgsl), and the helpers several stages call (a per-item kernel's guard, a
+// one-workgroup kernel's run state, the workgroup's exclusive prefix, the Lagrange update). Every
 // contact kernel binds the same bind group 0 (one explicit layout, built once); the kernels that
-// write indirect dispatch sizes also bind group 1. Rust mirrors: src/gpu/contact/mod.rs.
+// write indirect dispatch sizes also bind group 1. Rust mirrors: src/gpu/contact/mod.rs (the
+// parameters and counters) and src/gpu/contact/tables.rs (Slot, Segment).
 //
 // Local contact nodes are numbered 0..n_local; a slot is one pass's slave node or one wall's node;
 // segments are the master segments of every pass. Workspace arrays live in `ws` (u32 words) and
@@ -226,6 +229,11 @@ fn contact_running() -> bool {
     return ctrl.state == STATE_RUNNING;
 }
 
+// Whether thread i of a per-item kernel over n items has an item to work on this step.
+fn item_runs(i: u32, n: u32) -> bool {
+    return contact_running() && i < n;
+}
+
 var<workgroup> sh_state: u32;
 
 // contact_running() as a workgroup-uniform value (for kernels with barriers); `l` the local index.
@@ -234,6 +242,28 @@ fn running_uniform(l: u32) -> bool {
         sh_state = ctrl.state;
     }
     return workgroupUniformLoad(&sh_state) == STATE_RUNNING;
+}
+
+var<workgroup> sh_prefix: array<u32, SG>;
+var<workgroup> sh_total: u32;
+
+// The exclusive prefix of the lanes' `x` in lane order (lane 0 adds them up in turn: the same on
+// every run) for lane l; their total in sh_total after the call. Every lane of a one-workgroup
+// kernel calls it, in uniform control flow.
+fn workgroup_prefix(l: u32, x: u32) -> u32 {
+    sh_prefix[l] = x;
+    workgroupBarrier();
+    if (l == 0u) {
+        var acc = 0u;
+        for (var t = 0u; t < SG; t++) {
+            let y = sh_prefix[t];
+            sh_prefix[t] = acc;
+            acc += y;
+        }
+        sh_total = acc;
+    }
+    workgroupBarrier();
+    return sh_prefix[l];
 }
 
 // 1 / (1 + c): mass damping makes the update's masses (1 + c) m (see Control.damp_c).

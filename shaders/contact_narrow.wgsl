@@ -510,11 +510,9 @@ fn narrow_active(j: u32) {
 // summed in slot order (its adjacency list is sorted): the same bits on every run.
 @compute @workgroup_size(CG)
 fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
-    if (!contact_running() || i >= cc.p.n_local) {
-        return;
+    if (item_runs(gid.x, cc.p.n_local)) {
+        gather_node(gid.x);
     }
-    gather_node(i);
 }
 
 // `gather` of local node i.

@@ -6,11 +6,13 @@
 // lane group, so the per-item kernels have one barrier each and the one-workgroup `report_end`
 // runs SG lanes (8 on CPU adapters).
 
-// Compiled after contact_narrow.wgsl (its bindings and active-slot list).
+// Compiled after contact_narrow.wgsl (its bindings and active-slot list) and tree.wgsl (report_end's
+// trees: sh_sum, and sum_tree for the work).
+
+const TREE: u32 = SG;
 
 var<workgroup> sh_f: array<vec4<f32>, CG>;
-var<workgroup> sh_e: array<vec4<f32>, SG>;   // report_end's trees
-var<workgroup> sh_er: array<vec4<f32>, SG>;
+var<workgroup> sh_er: array<vec4<f32>, SG>;   // report_end's friction tree (sh_sum: the reports')
 var<workgroup> sh_ni: u32;
 
 // First word of interface f in a history row: after the contact energy (and with friction the
@@ -238,11 +240,9 @@ fn acc_set(f: u32, a: vec4<f32>) {
 //     an interface of many slots costs its slots / (CG SG) loads per lane, not its slots / CG.
 @compute @workgroup_size(SG)
 fn report_end(@builtin(local_invocation_id) lid: vec3<u32>) {
-    let l = lid.x;
-    if (!running_uniform(l)) {
-        return;
+    if (running_uniform(lid.x)) {
+        report_end_step(lid.x);
     }
-    report_end_step(l);
 }
 
 // `report_end`'s work, by invocation l of its workgroup.
@@ -275,20 +275,20 @@ fn report_end_step(l: u32) {
                 }
             }
         }
-        sh_e[l] = r;
+        sh_sum[l] = r;
         sh_er[l] = rf;
         workgroupBarrier();
         for (var h = SG / 2u; h > 0u; h >>= 1u) {
             if (l < h) {
-                let a = sh_e[l];
-                let b = sh_e[l + h];
-                sh_e[l] = vec4<f32>(a.xyz + b.xyz, max(a.w, b.w));
+                let a = sh_sum[l];
+                let b = sh_sum[l + h];
+                sh_sum[l] = vec4<f32>(a.xyz + b.xyz, max(a.w, b.w));
                 sh_er[l] += sh_er[l + h];
             }
             workgroupBarrier();
         }
         if (l == 0u) {
-            let t = sh_e[0];
+            let t = sh_sum[0];
             let tf = sh_er[0];
             fwork += tf.yz;
             // The friction impulse along the tangents also in the force (x, y), and its
@@ -322,18 +322,11 @@ fn report_end_step(l: u32) {
     for (var g = l; g < ng; g += SG) {
         part += fws[cc.p.f_wp + g];
     }
-    sh_e[l] = part;
-    workgroupBarrier();
-    for (var h = SG / 2u; h > 0u; h >>= 1u) {
-        if (l < h) {
-            sh_e[l] += sh_e[l + h];
-        }
-        workgroupBarrier();
-    }
+    sum_tree(l, part);
     if (l != 0u) {
         return;
     }
-    let total = sh_e[0];
+    let total = sh_sum[0];
     var w = acc_get(cc.p.n_ifaces);
     // The running sums in compensated (Kahan) form, their residuals in the next accumulator: a
     // step adds about 1e-4 of the sum over 10^4 steps and more, the same way every step, and plain

@@ -15,7 +15,6 @@
 @group(0) @binding(14) var<storage, read_write> grow: array<atomic<u32>>;
 @group(1) @binding(0) var<storage, read_write> ind: array<u32>;
 
-var<workgroup> sh_scan: array<u32, SG>;
 var<workgroup> sh_u: u32;
 
 fn wsl(i: u32) -> u32 {
@@ -29,11 +28,9 @@ fn wss(i: u32, v: u32) {
 // 1. Positions u_n and u_n + dt v of the free update, v^{n-1/2}, dv = 0, and whether a search is due.
 @compute @workgroup_size(CG)
 fn prep(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
-    if (!contact_running() || i >= cc.p.n_local) {
-        return;
+    if (item_runs(gid.x, cc.p.n_local)) {
+        prep_node(gid.x);
     }
-    prep_node(i);
 }
 
 // `prep` of local node i.
@@ -226,17 +223,26 @@ fn seg_buckets(j: u32, out: ptr<function, array<u32, 4>>) -> u32 {
     return n;
 }
 
-// 2b. Segments per bucket.
-@compute @workgroup_size(CG)
-fn seg_count(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let j = gid.x;
-    if (!contact_running() || j >= cc.p.n_segs) {
-        return;
-    }
+// Segment j in each of its buckets: counted (fill false), or among the bucket's entries (fill
+// true; in any order: the slots sort their candidates).
+fn bucket_segment(j: u32, fill: bool) {
     var bs: array<u32, 4>;
     let n = seg_buckets(j, &bs);
     for (var m = 0u; m < n; m++) {
-        atomicAdd(&ws[cc.p.o_bcount + bs[m]], 1u);
+        if (fill) {
+            let at = atomicAdd(&ws[cc.p.o_bcur + bs[m]], 1u);
+            wss(cc.p.o_bent + at, j);
+        } else {
+            atomicAdd(&ws[cc.p.o_bcount + bs[m]], 1u);
+        }
+    }
+}
+
+// 2b. Segments per bucket.
+@compute @workgroup_size(CG)
+fn seg_count(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (item_runs(gid.x, cc.p.n_segs)) {
+        bucket_segment(gid.x, false);
     }
 }
 
@@ -250,19 +256,7 @@ fn scan(src: u32, dst: u32, cur: u32, n: u32, l: u32) -> u32 {
     for (var i = begin; i < end; i++) {
         sum += wsl(src + i);
     }
-    sh_scan[l] = sum;
-    workgroupBarrier();
-    if (l == 0u) {
-        var acc = 0u;
-        for (var t = 0u; t < SG; t++) {
-            let x = sh_scan[t];
-            sh_scan[t] = acc;
-            acc += x;
-        }
-        sh_u = acc;
-    }
-    workgroupBarrier();
-    var acc = sh_scan[l];
+    var acc = workgroup_prefix(l, sum);
     for (var i = begin; i < end; i++) {
         let x = wsl(src + i);
         wss(dst + i, acc);
@@ -271,7 +265,7 @@ fn scan(src: u32, dst: u32, cur: u32, n: u32, l: u32) -> u32 {
         }
         acc += x;
     }
-    let total = workgroupUniformLoad(&sh_u);
+    let total = workgroupUniformLoad(&sh_total);
     if (l == 0u) {
         wss(dst + n, total);
     }
@@ -286,18 +280,11 @@ fn scan_buckets(@builtin(local_invocation_id) lid: vec3<u32>) {
     scan(cc.p.o_bcount, cc.p.o_boff, cc.p.o_bcur, cc.p.n_buckets, lid.x);
 }
 
-// 2c. Bucket entries (in any order: the slots sort their candidates).
+// 2c. Bucket entries.
 @compute @workgroup_size(CG)
 fn seg_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let j = gid.x;
-    if (!contact_running() || j >= cc.p.n_segs) {
-        return;
-    }
-    var bs: array<u32, 4>;
-    let n = seg_buckets(j, &bs);
-    for (var m = 0u; m < n; m++) {
-        let at = atomicAdd(&ws[cc.p.o_bcur + bs[m]], 1u);
-        wss(cc.p.o_bent + at, j);
+    if (item_runs(gid.x, cc.p.n_segs)) {
+        bucket_segment(gid.x, true);
     }
 }
 
@@ -398,7 +385,7 @@ fn wall_near(sl: Slot) -> bool {
 @compute @workgroup_size(CG)
 fn slot_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cc.p.n_slots) {
+    if (!item_runs(k, cc.p.n_slots)) {
         return;
     }
     let n = visit(k, 0u, 0u);
@@ -442,7 +429,7 @@ fn scan_slots(@builtin(local_invocation_id) lid: vec3<u32>) {
 @compute @workgroup_size(CG)
 fn slot_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cc.p.n_slots) {
+    if (!item_runs(k, cc.p.n_slots)) {
         return;
     }
     visit(k, 1u, wsl(cc.p.o_coff + k));
@@ -475,19 +462,29 @@ fn repeated(k: u32, m: u32, i: u32) -> bool {
     return false;
 }
 
-// 3a. Slots per node.
-@compute @workgroup_size(CG)
-fn adj_count(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
-    if (!contact_running() || k >= cc.p.n_slots) {
-        return;
-    }
+// The distinct nodes slot k touches: counted (fill false), or given slot k in their adjacency
+// lists (fill true).
+fn visit_touched(k: u32, fill: bool) {
     let nt = n_touched(k);
     for (var m = 0u; m < nt; m++) {
         let i = touched(k, m);
-        if (!repeated(k, m, i)) {
+        if (repeated(k, m, i)) {
+            continue;
+        }
+        if (fill) {
+            let at = atomicAdd(&ws[cc.p.o_ncur + i], 1u);
+            atomicStore(&grow[cc.p.cand_capacity + at], k);
+        } else {
             atomicAdd(&ws[cc.p.o_ncount + i], 1u);
         }
+    }
+}
+
+// 3a. Slots per node.
+@compute @workgroup_size(CG)
+fn adj_count(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (item_runs(gid.x, cc.p.n_slots)) {
+        visit_touched(gid.x, false);
     }
 }
 
@@ -505,24 +502,15 @@ fn scan_nodes(@builtin(local_invocation_id) lid: vec3<u32>) {
 // 3b. Node adjacency entries (sorted per node next).
 @compute @workgroup_size(CG)
 fn adj_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
-    if (!contact_running() || k >= cc.p.n_slots) {
-        return;
-    }
-    let nt = n_touched(k);
-    for (var m = 0u; m < nt; m++) {
-        let i = touched(k, m);
-        if (!repeated(k, m, i)) {
-            let at = atomicAdd(&ws[cc.p.o_ncur + i], 1u);
-            atomicStore(&grow[cc.p.cand_capacity + at], k);
-        }
+    if (item_runs(gid.x, cc.p.n_slots)) {
+        visit_touched(gid.x, true);
     }
 }
 
 @compute @workgroup_size(CG)
 fn adj_sort(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if (!contact_running() || i >= cc.p.n_local) {
+    if (!item_runs(i, cc.p.n_local)) {
         return;
     }
     let b = cc.p.cand_capacity + wsl(cc.p.o_noff + i);
@@ -577,7 +565,7 @@ fn jp_round(k: u32, r: u32) {
 @compute @workgroup_size(CG)
 fn color_round(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cc.p.n_slots) {
+    if (!item_runs(k, cc.p.n_slots)) {
         return;
     }
     jp_round(k, round_index.x);
@@ -587,7 +575,7 @@ fn color_round(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(CG)
 fn list_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cc.p.n_slots) {
+    if (!item_runs(k, cc.p.n_slots)) {
         return;
     }
     let c = wsl(cc.p.o_color + k);
@@ -627,7 +615,7 @@ fn scan_lists(@builtin(local_invocation_id) lid: vec3<u32>) {
 @compute @workgroup_size(CG)
 fn list_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (!contact_running() || k >= cc.p.n_slots) {
+    if (!item_runs(k, cc.p.n_slots)) {
         return;
     }
     let c = wsl(cc.p.o_color + k);

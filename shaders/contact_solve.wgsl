@@ -20,7 +20,6 @@ var<workgroup> sh_w: u32;
 var<workgroup> sh_nc: u32;
 var<workgroup> sh_off: array<u32, 34>;   // colour offsets of the compacted slots (SERIAL + 2)
 var<workgroup> sh_max: atomic<u32>;
-var<workgroup> sh_pre: array<u32, SG>;
 var<workgroup> sh_split: u32;
 var<workgroup> sh_nn: u32;         // nodes of the compacted constraints (ws[o_nlist..])
 var<workgroup> sh_change: u32;     // f32 bits of the last sweep's largest change
@@ -93,19 +92,7 @@ fn compact(l: u32) {
             mine += 1u;
         }
     }
-    sh_pre[l] = mine;
-    workgroupBarrier();
-    if (l == 0u) {
-        var acc = 0u;
-        for (var t = 0u; t < SG; t++) {
-            let x = sh_pre[t];
-            sh_pre[t] = acc;
-            acc += x;
-        }
-        sh_nc = acc;
-    }
-    workgroupBarrier();
-    var at = sh_pre[l];
+    var at = workgroup_prefix(l, mine);
     for (var j = begin; j < end; j++) {
         let k = active_slot(j);
         if (cons[k].kind == KIND_LAGRANGE) {
@@ -116,7 +103,7 @@ fn compact(l: u32) {
     storageBarrier();
     workgroupBarrier();
     if (l == 0u) {
-        let na = sh_nc;
+        let na = sh_total;
         sh_nn = 0u;
         var count: array<u32, 33>;
         for (var c = 0u; c <= SERIAL; c++) {
@@ -431,11 +418,9 @@ fn split_round_runs(r: u32) -> bool {
 // constraints; unsplit, every round here, each re-check over the active slots in this workgroup.
 @compute @workgroup_size(SG)
 fn solve_one(@builtin(local_invocation_id) lid: vec3<u32>) {
-    let l = lid.x;
-    if (!running_uniform(l)) {
-        return;
+    if (running_uniform(lid.x)) {
+        solve_step(lid.x);
     }
-    solve_step(l);
 }
 
 // `solve_one`'s work, by invocation l of its workgroup.

@@ -3,8 +3,11 @@
 // control_end: the history row from the instances' sums (reduce.wgsl's sum_instances, or here for
 //   fused small models), then t_{n+1}, the flags of the next step (sample / snapshot / end, same
 //   rules as step::Clock) and the indirect dispatch sizes.
+// Compiled after tree.wgsl and reduce_common.wgsl (the lanes' shares and the trees, shared with
+// reduce.wgsl).
 
 const RG: u32 = 256u;
+const TREE: u32 = RG;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read_write> ctrl: Control;
@@ -21,9 +24,6 @@ const RG: u32 = 256u;
 @group(0) @binding(10) var<storage, read_write> inst_res: array<vec4<f32>>;
 
 var<workgroup> sh_u: u32;
-var<workgroup> sh_dt: array<f32, RG>;
-var<workgroup> sh_ix: array<u32, RG>;
-var<workgroup> sh_sum: array<vec4<f32>, RG>;
 
 fn fail(code: u32, index: u32, value: f32) {
     ctrl.state = STATE_FAILED;
@@ -32,59 +32,53 @@ fn fail(code: u32, index: u32, value: f32) {
     ctrl.fail_value = value;
 }
 
+// Fails the run with `code` when a kernel flagged `bad` (an inverted element, a node whose
+// velocity is not finite; NONE: none); whether it did.
+fn flagged(bad: u32, code: u32) -> bool {
+    if (bad != NONE) {
+        fail(code, bad, 0.0);
+    }
+    return bad != NONE;
+}
+
 // t_n + TIME_SLACK dt^{n-1/2} >= T (step::Clock's rule), in ticks.
 fn due(when: vec2<u32>) -> bool {
     let slack = to_ticks(0.01 * ctrl.dt_prev, params.ticks_per_second);
     return ge64(add64(vec2<u32>(ctrl.t_lo, ctrl.t_hi), slack), when);
 }
 
-fn better(d0: f32, i0: u32, d1: f32, i1: u32) -> bool {
-    return d1 < d0 || (d1 == d0 && i1 < i0);
+// Whether the run goes on (ctrl.state), as a workgroup-uniform value; `l` the local index.
+fn running(l: u32) -> bool {
+    if (l == 0u) {
+        sh_u = ctrl.state;
+    }
+    return workgroupUniformLoad(&sh_u) == STATE_RUNNING;
 }
 
 @compute @workgroup_size(RG)
 fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
-    if (l == 0u) {
-        sh_u = ctrl.state;
-    }
-    let state = workgroupUniformLoad(&sh_u);
-    if (state != STATE_RUNNING) {
+    if (!running(l)) {
         return;
     }
-    var d = 3.0e38;
-    var ix = NONE;
     if (params.dt_groups == 0u) {
-        for (var j = l; j < params.n_elems; j += RG) {
-            let dj = elem_dt[j];
-            if (better(d, ix, dj, j)) {
-                d = dj;
-                ix = j;
-            }
+        lane_min_dt(l, 0u, RG);
+    } else {
+        var d = 3.0e38;
+        var ix = NONE;
+        if (l < params.dt_groups) {
+            let p = dt_partial[l];
+            d = bitcast<f32>(p.x);
+            ix = p.y;
         }
-    } else if (l < params.dt_groups) {
-        let p = dt_partial[l];
-        d = bitcast<f32>(p.x);
-        ix = p.y;
+        sh_dt[l] = d;
+        sh_ix[l] = ix;
     }
-    sh_dt[l] = d;
-    sh_ix[l] = ix;
-    workgroupBarrier();
-    for (var s = RG / 2u; s > 0u; s >>= 1u) {
-        if (l < s) {
-            if (better(sh_dt[l], sh_ix[l], sh_dt[l + s], sh_ix[l + s])) {
-                sh_dt[l] = sh_dt[l + s];
-                sh_ix[l] = sh_ix[l + s];
-            }
-        }
-        workgroupBarrier();
-    }
+    min_tree(l);
     if (l != 0u) {
         return;
     }
-    let bad = atomicLoad(&ctrl.bad_element);
-    if (bad != NONE) {
-        fail(1u, bad, 0.0);
+    if (flagged(atomicLoad(&ctrl.bad_element), 1u)) {
         return;
     }
     let dt_min = sh_dt[0];
@@ -141,11 +135,7 @@ fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
 @compute @workgroup_size(RG)
 fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     let l = lid.x;
-    if (l == 0u) {
-        sh_u = ctrl.state;
-    }
-    let state = workgroupUniformLoad(&sh_u);
-    if (state != STATE_RUNNING) {
+    if (!running(l)) {
         return;
     }
     if (l == 0u) {
@@ -156,19 +146,7 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     // Fused (small models on CPU adapters): the instances' sums here; else sum_instances did them.
     if (sample && params.sum_groups == 0u) {
         for (var r = 0u; r < params.n_instances; r++) {
-            let inst = instances[r];
-            var acc = vec4<f32>(0.0);
-            for (var j = l; j < inst.count; j += RG) {
-                acc += sample_src[inst.start + j];
-            }
-            sh_sum[l] = acc;
-            workgroupBarrier();
-            for (var s = RG / 2u; s > 0u; s >>= 1u) {
-                if (l < s) {
-                    sh_sum[l] += sh_sum[l + s];
-                }
-                workgroupBarrier();
-            }
+            sum_items(l, instances[r], 0u, RG);
             if (l == 0u) {
                 inst_res[r] = sh_sum[0];
             }
@@ -189,21 +167,12 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
             history[bw + 2u * b] = v.x;
             history[bw + 1u + 2u * b] = v.y;
         }
-        sh_sum[l] = vec4<f32>(ke_lane, 0.0, 0.0, 0.0);
-        workgroupBarrier();
-        for (var s = RG / 2u; s > 0u; s >>= 1u) {
-            if (l < s) {
-                sh_sum[l] += sh_sum[l + s];
-            }
-            workgroupBarrier();
-        }
+        sum_tree(l, vec4<f32>(ke_lane, 0.0, 0.0, 0.0));
     }
     if (l != 0u) {
         return;
     }
-    let bad = atomicLoad(&ctrl.bad_node);
-    if (bad != NONE) {
-        fail(2u, bad, 0.0);
+    if (flagged(atomicLoad(&ctrl.bad_node), 2u)) {
         return;
     }
     if (sample) {

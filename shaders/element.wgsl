@@ -242,10 +242,7 @@ fn j2_update(bd: Body, h: vec4<f32>, jm1: f32, zm1: f32, d: vec4<f32>, alpha: f3
 @compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= params.n_elems) {
-        return;
-    }
-    if (ctrl.state != STATE_RUNNING) {
+    if (e >= params.n_elems || ctrl.state != STATE_RUNNING) {
         return;
     }
     let el = elems[e];

@@ -43,10 +43,7 @@ fn gravity_now() -> vec2<f32> {
 @compute @workgroup_size(WG)
 fn pressure_force(@builtin(global_invocation_id) gid: vec3<u32>) {
     let k = gid.x;
-    if (k >= arrayLength(&entries)) {
-        return;
-    }
-    if (ctrl.state != STATE_RUNNING) {
+    if (k >= arrayLength(&entries) || ctrl.state != STATE_RUNNING) {
         return;
     }
     let e = entries[k];
@@ -62,10 +59,7 @@ fn pressure_force(@builtin(global_invocation_id) gid: vec3<u32>) {
 @compute @workgroup_size(WG)
 fn load_work(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if (i >= params.n_nodes) {
-        return;
-    }
-    if (ctrl.state != STATE_RUNNING) {
+    if (i >= params.n_nodes || ctrl.state != STATE_RUNNING) {
         return;
     }
     let first = ctrl.step == 0u;

@@ -44,10 +44,7 @@ fn gravity_now() -> vec2<f32> {
 @compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if (i >= params.n_nodes) {
-        return;
-    }
-    if (ctrl.state != STATE_RUNNING) {
+    if (i >= params.n_nodes || ctrl.state != STATE_RUNNING) {
         return;
     }
     var f = vec2<f32>(0.0);

@@ -3,10 +3,11 @@
 // sum: per instance (a contiguous range of sample_src), partial vec4 sums per workgroup.
 // sum_instances: the second level of the sums, one workgroup per instance (a body, the elements,
 //   the constraints, ...), so that a sample costs the same whatever the number of bodies.
-// The stable step's second level runs in control.wgsl (one workgroup).
+// The stable step's second level runs in control.wgsl (one workgroup). Compiled after tree.wgsl
+// and reduce_common.wgsl (the lanes' shares and the trees, shared with control.wgsl).
 
 const RG: u32 = 256u;
-
+const TREE: u32 = RG;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> elem_dt: array<f32>;
@@ -16,39 +17,11 @@ const RG: u32 = 256u;
 @group(0) @binding(5) var<storage, read_write> sum_partial: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> inst_res: array<vec4<f32>>;
 
-var<workgroup> sh_dt: array<f32, RG>;
-var<workgroup> sh_ix: array<u32, RG>;
-var<workgroup> sh_sum: array<vec4<f32>, RG>;
-
-fn better(d0: f32, i0: u32, d1: f32, i1: u32) -> bool {
-    return d1 < d0 || (d1 == d0 && i1 < i0);
-}
-
 @compute @workgroup_size(RG)
 fn min_dt(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wid: vec3<u32>) {
     let l = lid.x;
-    var d = 3.0e38;
-    var ix = NONE;
-    let stride = params.dt_groups * RG;
-    for (var j = wid.x * RG + l; j < params.n_elems; j += stride) {
-        let dj = elem_dt[j];
-        if (better(d, ix, dj, j)) {
-            d = dj;
-            ix = j;
-        }
-    }
-    sh_dt[l] = d;
-    sh_ix[l] = ix;
-    workgroupBarrier();
-    for (var s = RG / 2u; s > 0u; s >>= 1u) {
-        if (l < s) {
-            if (better(sh_dt[l], sh_ix[l], sh_dt[l + s], sh_ix[l + s])) {
-                sh_dt[l] = sh_dt[l + s];
-                sh_ix[l] = sh_ix[l + s];
-            }
-        }
-        workgroupBarrier();
-    }
+    lane_min_dt(l, wid.x * RG, params.dt_groups * RG);
+    min_tree(l);
     if (l == 0u) {
         dt_partial[wid.x] = vec2<u32>(bitcast<u32>(sh_dt[0]), sh_ix[0]);
     }
@@ -71,20 +44,7 @@ fn sum(@builtin(local_invocation_id) lid: vec3<u32>, @builtin(workgroup_id) wid:
         }
     }
     let inst = instances[lo];
-    let local_group = g - inst.first_group;
-    var acc = vec4<f32>(0.0);
-    let stride = inst.groups * RG;
-    for (var j = local_group * RG + l; j < inst.count; j += stride) {
-        acc += sample_src[inst.start + j];
-    }
-    sh_sum[l] = acc;
-    workgroupBarrier();
-    for (var s = RG / 2u; s > 0u; s >>= 1u) {
-        if (l < s) {
-            sh_sum[l] += sh_sum[l + s];
-        }
-        workgroupBarrier();
-    }
+    sum_items(l, inst, (g - inst.first_group) * RG, inst.groups * RG);
     if (l == 0u) {
         sum_partial[g] = sh_sum[0];
     }
@@ -105,14 +65,7 @@ fn sum_instances(
         if (l < inst.groups) {
             acc = sum_partial[inst.first_group + l];
         }
-        sh_sum[l] = acc;
-        workgroupBarrier();
-        for (var s = RG / 2u; s > 0u; s >>= 1u) {
-            if (l < s) {
-                sh_sum[l] += sh_sum[l + s];
-            }
-            workgroupBarrier();
-        }
+        sum_tree(l, acc);
         if (l == 0u) {
             inst_res[r] = sh_sum[0];
         }

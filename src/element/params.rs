@@ -1,6 +1,6 @@
 //! A body's element parameters: its material's constants in the forms the element uses
 //! ([`ElementParams`]), its hourglass control and bulk viscosity. Built once per body by the
-//! model; the GPU solver uploads them per body in f32 ([`crate::gpu::layout::GpuBody`]).
+//! model; the GPU solver uploads them per body in f32 ([`crate::gpu::element::GpuBody`]).
 
 use crate::scene::{Formulation, HourglassForm, Material, MaterialModel};
 

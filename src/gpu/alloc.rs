@@ -1,21 +1,35 @@
 //! The device buffers of a scene as they are allocated ([`Alloc`]): each one created once, named,
 //! its size listed for the plan report ([`super::state::GpuState::allocated`]) and the buffer
-//! kept for checkpoints. Host-side bookkeeping of the GPU state and its contact buffers: no
-//! kernel, so no CPU twin.
+//! kept in allocation order for checkpoints (`src/gpu/checkpoint.rs`). Host-side bookkeeping of
+//! the GPU state and its contact buffers: no kernel, so no CPU twin.
 
 use wgpu::util::DeviceExt;
 
-/// The buffers of one scene as they are allocated.
+/// The buffers of a scene as they are allocated.
 pub(crate) struct Alloc<'a> {
-    pub(super) device: &'a wgpu::Device,
-    /// Name and size (bytes) of every buffer, in order of allocation.
-    pub(super) list: Vec<(&'static str, u64)>,
+    device: &'a wgpu::Device,
+    list: Vec<(&'static str, u64)>,
     /// Every buffer allocated, for checkpoints (each is copyable both ways).
-    pub(super) buffers: Vec<(&'static str, wgpu::Buffer)>,
+    buffers: Vec<(&'static str, wgpu::Buffer)>,
 }
 
-impl Alloc<'_> {
-    /// A buffer named `name` holding `data` (16 zero bytes when empty), for `usage` and copies.
+impl<'a> Alloc<'a> {
+    /// No buffers yet, on `device`.
+    pub(crate) fn new(device: &'a wgpu::Device) -> Self {
+        Alloc {
+            device,
+            list: Vec::new(),
+            buffers: Vec::new(),
+        }
+    }
+
+    /// The names and sizes of the buffers allocated (with those only recorded), and the buffers.
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn finish(self) -> (Vec<(&'static str, u64)>, Vec<(&'static str, wgpu::Buffer)>) {
+        (self.list, self.buffers)
+    }
+
+    /// A buffer `name` holding `data` (16 zero bytes when empty), copyable both ways.
     pub(crate) fn init(
         &mut self,
         name: &'static str,
@@ -42,8 +56,8 @@ impl Alloc<'_> {
         self.list.push((name, size));
     }
 
-    /// A zeroed buffer named `name` of `size` bytes (at least 16), for `usage` and copies.
-    pub(super) fn zeroed(
+    /// A zeroed buffer `name` of `size` bytes (at least 16), copyable both ways.
+    pub(crate) fn zeroed(
         &mut self,
         name: &'static str,
         size: u64,

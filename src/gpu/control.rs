@@ -2,17 +2,22 @@
 //! stable-step reduction and sets dt^{n+1/2} and dt_n; `control_end` finishes the sample sums,
 //! writes the history row, advances the time and decides the next step's flags, with the same
 //! rules as [`crate::step::Clock`]. Failures (inverted element, non-finite node, step too large)
-//! set the state to failed and every later dispatch returns at once.
+//! set the state to failed and every later dispatch returns at once. Small models on CPU adapters
+//! reduce here directly, with the lanes' shares and trees of [`super::reduce`]
+//! (`shaders/reduce_common.wgsl`, `shaders/tree.wgsl`).
+
+use wgpu::{ComputePipeline, Device};
 
 use super::shader::{compute_pipeline, Features};
 
-/// WGSL source.
-pub const SOURCE: &str = include_str!("../../shaders/control.wgsl");
+/// WGSL source (the sum tree and the parts shared with [`super::reduce`] first).
+pub const SOURCE: &str = concat!(
+    include_str!("../../shaders/tree.wgsl"),
+    include_str!("../../shaders/reduce_common.wgsl"),
+    include_str!("../../shaders/control.wgsl")
+);
 
-pub(crate) fn dt_pipeline(device: &wgpu::Device, features: Features) -> wgpu::ComputePipeline {
-    compute_pipeline(device, "control_dt", SOURCE, features, "control_dt", None)
-}
-
-pub(crate) fn end_pipeline(device: &wgpu::Device, features: Features) -> wgpu::ComputePipeline {
-    compute_pipeline(device, "control_end", SOURCE, features, "control_end", None)
+/// The pipeline of entry point `entry` (`control_dt`, `control_end`).
+pub(crate) fn pipeline(device: &Device, features: Features, entry: &str) -> ComputePipeline {
+    compute_pipeline(device, entry, SOURCE, features, entry, None)
 }

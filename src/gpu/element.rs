@@ -1,8 +1,13 @@
 //! Element stage kernel (`shaders/element.wgsl`): stress, hourglass and bulk-viscosity forces per
-//! element, the element stable step, and on sample steps the element energies. The CPU reference
-//! is [`crate::element::evaluate`]; `tests/gpu.rs` compares the two on random inputs.
+//! element, the element stable step, and on sample steps the element energies; the mirrors of its
+//! `Body` and `Element` and their tables from the model. The CPU reference is
+//! [`crate::element::evaluate`]; `tests/gpu.rs` compares the two on random inputs.
+
+use bytemuck::{Pod, Zeroable};
 
 use super::shader::{compute_pipeline, Features};
+use crate::model::Model;
+use crate::scene::{Formulation, HourglassForm, MaterialModel};
 
 /// WGSL source.
 pub const SOURCE: &str = include_str!("../../shaders/element.wgsl");
@@ -10,6 +15,123 @@ pub const SOURCE: &str = include_str!("../../shaders/element.wgsl");
 /// Threads per workgroup.
 pub const WORKGROUP: u32 = 64;
 
+/// Mirror of WGSL `Body`: a body's material and element parameters (fields documented in
+/// `shaders/element.wgsl`).
+#[allow(missing_docs)]
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuBody {
+    pub model: u32,
+    pub formulation: u32,
+    pub hourglass: u32,
+    pub _pad0: u32,
+    pub density: f32,
+    pub thickness: f32,
+    pub lambda: f32,
+    pub mu: f32,
+    pub lambda_plane: f32,
+    pub wave_modulus: f32,
+    pub hourglass_coefficient: f32,
+    pub bulk_linear: f32,
+    pub bulk_quadratic: f32,
+    pub mass: f32,
+    pub yield_stress: f32,
+    pub hardening: f32,
+    pub jc_b: f32,
+    pub jc_n: f32,
+    pub jc_c: f32,
+    pub jc_rate0: f32,
+}
+
+/// Mirror of WGSL `Element`: corners relative to the centre, nodes, body (fields documented in
+/// `shaders/element.wgsl`).
+#[allow(missing_docs)]
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuElement {
+    pub c01: [f32; 4],
+    pub c23: [f32; 4],
+    pub nodes: [u32; 4],
+    pub body: u32,
+    pub radius: f32,
+    pub _pad: [u32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<GpuBody>() == 80);
+const _: () = assert!(std::mem::size_of::<GpuElement>() == 64);
+
 pub(crate) fn pipeline(device: &wgpu::Device, features: Features) -> wgpu::ComputePipeline {
     compute_pipeline(device, "element", SOURCE, features, "main", Some(WORKGROUP))
+}
+
+/// The bodies of `model` as the kernel reads them.
+pub fn bodies(model: &Model) -> Vec<GpuBody> {
+    model
+        .bodies
+        .iter()
+        .map(|b| {
+            let p = &b.params;
+            GpuBody {
+                model: match p.model {
+                    MaterialModel::LinearElastic => 0,
+                    MaterialModel::NeoHookean => 1,
+                    MaterialModel::J2Plastic => 2,
+                },
+                formulation: match p.formulation {
+                    Formulation::PlaneStrain => 0,
+                    Formulation::PlaneStress => 1,
+                    Formulation::Axisymmetric => 2,
+                },
+                hourglass: match p.hourglass {
+                    HourglassForm::None => 0,
+                    HourglassForm::Viscous => 1,
+                    HourglassForm::Stiffness => 2,
+                },
+                density: p.density as f32,
+                thickness: p.thickness as f32,
+                lambda: p.lambda as f32,
+                mu: p.mu as f32,
+                lambda_plane: p.lambda_plane as f32,
+                wave_modulus: p.wave_modulus as f32,
+                hourglass_coefficient: p.hourglass_coefficient as f32,
+                bulk_linear: p.bulk_linear as f32,
+                bulk_quadratic: p.bulk_quadratic as f32,
+                mass: b.mass as f32,
+                yield_stress: p.yield_stress.min(f32::MAX as f64) as f32,
+                hardening: p.hardening as f32,
+                jc_b: p.jc_b as f32,
+                jc_n: p.jc_n as f32,
+                jc_c: p.jc_c as f32,
+                jc_rate0: p.jc_rate0 as f32,
+                ..Default::default()
+            }
+        })
+        .collect()
+}
+
+/// The elements of `model` as the kernel reads them.
+pub fn elements(model: &Model) -> Vec<GpuElement> {
+    (0..model.element_count())
+        .map(|e| {
+            let c = model.corners[e];
+            GpuElement {
+                c01: [
+                    c[0][0] as f32,
+                    c[0][1] as f32,
+                    c[1][0] as f32,
+                    c[1][1] as f32,
+                ],
+                c23: [
+                    c[2][0] as f32,
+                    c[2][1] as f32,
+                    c[3][0] as f32,
+                    c[3][1] as f32,
+                ],
+                nodes: model.quads[e],
+                body: model.element_body[e],
+                radius: model.radius.get(e).copied().unwrap_or(0.0) as f32,
+                _pad: [0; 2],
+            }
+        })
+        .collect()
 }

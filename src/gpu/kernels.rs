@@ -45,18 +45,18 @@ impl Kernels {
         Self {
             features,
             element: element::pipeline(device, features),
-            min_dt: reduce::min_pipeline(device, features),
-            control_dt: control::dt_pipeline(device, features),
+            min_dt: reduce::pipeline(device, features, "min_dt"),
+            control_dt: control::pipeline(device, features, "control_dt"),
             node: node::pipeline(device, features),
             boundary: boundaries.then(|| boundary::pipeline(device, features)),
             contact: contact.then(|| contact::ContactKernels::new(device, features)),
-            pressure: pressure.then(|| loads::pressure_pipeline(device, features)),
+            pressure: pressure.then(|| loads::pipeline(device, features, "pressure_force")),
             load_work: features
                 .loads
-                .then(|| loads::work_pipeline(device, features)),
-            sum: reduce::sum_pipeline(device, features),
-            sum_instances: reduce::sum_instances_pipeline(device, features),
-            control_end: control::end_pipeline(device, features),
+                .then(|| loads::pipeline(device, features, "load_work")),
+            sum: reduce::pipeline(device, features, "sum"),
+            sum_instances: reduce::pipeline(device, features, "sum_instances"),
+            control_end: control::pipeline(device, features, "control_end"),
         }
     }
 

@@ -1,6 +1,7 @@
-//! `#[repr(C)]` mirrors of the structs in `shaders/common.wgsl` and of the per-kernel structs,
-//! with their sizes asserted against the WGSL layout. Field meanings are documented once, in the
-//! WGSL declarations.
+//! `#[repr(C)]` mirrors of the structs in `shaders/common.wgsl` (the parameters, the run control
+//! and the sample instances every kernel shares; each kernel's own structs are mirrored beside it,
+//! in its `.rs`), with their sizes asserted against the WGSL layout, and the time in ticks. Field
+//! meanings are documented once, in the WGSL declarations.
 #![allow(missing_docs)]
 
 use bytemuck::{Pod, Zeroable};
@@ -81,58 +82,6 @@ pub struct Instance {
     pub _pad: [u32; 3],
 }
 
-/// Mirror of WGSL `Body` (element.wgsl).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuBody {
-    pub model: u32,
-    pub formulation: u32,
-    pub hourglass: u32,
-    pub _pad0: u32,
-    pub density: f32,
-    pub thickness: f32,
-    pub lambda: f32,
-    pub mu: f32,
-    pub lambda_plane: f32,
-    pub wave_modulus: f32,
-    pub hourglass_coefficient: f32,
-    pub bulk_linear: f32,
-    pub bulk_quadratic: f32,
-    pub mass: f32,
-    pub yield_stress: f32,
-    pub hardening: f32,
-    pub jc_b: f32,
-    pub jc_n: f32,
-    pub jc_c: f32,
-    pub jc_rate0: f32,
-}
-
-/// Mirror of WGSL `Element` (element.wgsl): corners relative to the centre, nodes, body.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuElement {
-    pub c01: [f32; 4],
-    pub c23: [f32; 4],
-    pub nodes: [u32; 4],
-    pub body: u32,
-    pub radius: f32,
-    pub _pad: [u32; 2],
-}
-
-/// Mirror of WGSL `Constraint` (boundary.wgsl).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuConstraint {
-    pub node: u32,
-    pub mask: u32,
-    pub vx: f32,
-    pub vy: f32,
-    pub mass: f32,
-    pub curve_x: u32,
-    pub curve_y: u32,
-    pub _pad: f32,
-}
-
 /// Control flags (WGSL `FLAG_*`).
 pub const FLAG_SAMPLE: u32 = 1;
 /// Snapshot due this step.
@@ -153,9 +102,6 @@ pub const NONE: u32 = u32::MAX;
 const _: () = assert!(std::mem::size_of::<Params>() == 112);
 const _: () = assert!(std::mem::size_of::<Control>() == 84);
 const _: () = assert!(std::mem::size_of::<Instance>() == 32);
-const _: () = assert!(std::mem::size_of::<GpuBody>() == 80);
-const _: () = assert!(std::mem::size_of::<GpuElement>() == 64);
-const _: () = assert!(std::mem::size_of::<GpuConstraint>() == 32);
 const _: () = assert!(std::mem::offset_of!(Control, state) as u64 == CONTROL_STATE_OFFSET);
 
 /// Ticks per end time: the GPU keeps time as a 64-bit count of `end_time / 2^40` (fewer ticks

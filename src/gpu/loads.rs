@@ -5,6 +5,7 @@
 //! `loads` variant of the node kernel.
 
 use bytemuck::{Pod, Zeroable};
+use wgpu::{ComputePipeline, Device};
 
 use super::shader::{compute_pipeline, Features};
 use crate::model::Model;
@@ -33,29 +34,9 @@ pub struct GpuPressureEntry {
 
 const _: () = assert!(std::mem::size_of::<GpuPressureEntry>() == 16);
 
-pub(crate) fn pressure_pipeline(
-    device: &wgpu::Device,
-    features: Features,
-) -> wgpu::ComputePipeline {
-    compute_pipeline(
-        device,
-        "pressure_force",
-        SOURCE,
-        features,
-        "pressure_force",
-        Some(WORKGROUP),
-    )
-}
-
-pub(crate) fn work_pipeline(device: &wgpu::Device, features: Features) -> wgpu::ComputePipeline {
-    compute_pipeline(
-        device,
-        "load_work",
-        SOURCE,
-        features,
-        "load_work",
-        Some(WORKGROUP),
-    )
+/// The pipeline of entry point `entry` (`pressure_force`, `load_work`).
+pub(crate) fn pipeline(device: &Device, features: Features, entry: &str) -> ComputePipeline {
+    compute_pipeline(device, entry, SOURCE, features, entry, Some(WORKGROUP))
 }
 
 /// The pressure entries in the CPU's order (loads in scene order, each load's nodes ascending),

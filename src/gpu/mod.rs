@@ -4,11 +4,14 @@
 //! element), [`reduce`] (stable-step minimum, sample sums), [`control`] (step control on the GPU),
 //! [`node`] (gather, central-difference update, energies on sample steps), [`boundary`]
 //! (prescribed velocities), [`loads`] (pressure loads, mass-damping work), [`contact`] (the
-//! contact stage by file: search, narrow phase, the Lagrange correction, reports). [`kernels::Kernels`] holds the compiled pipelines,
-//! [`state::GpuState`] the buffers, [`solver::GpuSolver`] drives them in batches of steps;
-//! [`context`] opens the adapter that [`choice`] picks (by index, PCI bus id or name, within
-//! `CUDA_VISIBLE_DEVICES` / `ROCR_VISIBLE_DEVICES`).
-//! All sums are gathers or fixed-order trees: the same scene on the same adapter gives the same bits.
+//! contact stage by file: search, narrow phase, the Lagrange correction, reports). What several
+//! kernels share is WGSL concatenated before them ([`shader`]: `common.wgsl`; `curve.wgsl`,
+//! `tree.wgsl`, `reduce_common.wgsl`, `contact_common.wgsl`). [`kernels::Kernels`] holds the
+//! compiled pipelines, [`state::GpuState`] the buffers (allocated through `alloc.rs`),
+//! [`solver::GpuSolver`] drives them in batches of steps; [`context`] opens the adapter that
+//! [`choice`] picks (by index, PCI bus id or name, within `CUDA_VISIBLE_DEVICES` /
+//! `ROCR_VISIBLE_DEVICES`). All sums are gathers or fixed-order trees: the same scene on the same
+//! adapter gives the same bits.
 
 mod alloc;
 pub mod boundary;

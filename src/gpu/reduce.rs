@@ -2,33 +2,28 @@
 //! element, and the sums of the sample instances. Each workgroup reads a strided set that depends
 //! only on the sizes, and sums in a fixed tree, so results are bit-reproducible. The sums' second
 //! level runs here too (`sum_instances`, one workgroup per instance, the same tree), the stable
-//! step's in [`super::control`].
+//! step's in [`super::control`]. The lanes' shares and the trees are WGSL shared with
+//! [`super::control`] (`shaders/reduce_common.wgsl`), the sum tree also with the contact reports
+//! ([`TREE`]). CPU reference: [`sum_reference`].
+
+use wgpu::{ComputePipeline, Device};
 
 use super::shader::{compute_pipeline, Features};
 
-/// WGSL source.
-pub const SOURCE: &str = include_str!("../../shaders/reduce.wgsl");
+/// WGSL source (the sum tree and the parts shared with [`super::control`] first).
+pub const SOURCE: &str = concat!(
+    include_str!("../../shaders/tree.wgsl"),
+    include_str!("../../shaders/reduce_common.wgsl"),
+    include_str!("../../shaders/reduce.wgsl")
+);
 
-pub(crate) fn min_pipeline(device: &wgpu::Device, features: Features) -> wgpu::ComputePipeline {
-    compute_pipeline(device, "min_dt", SOURCE, features, "min_dt", None)
-}
+/// The fixed-order sum over a workgroup's lanes (`shaders/tree.wgsl`): compiled before the
+/// reductions, the run control and the contact reports, each of which sets its size `TREE`.
+pub const TREE: &str = include_str!("../../shaders/tree.wgsl");
 
-pub(crate) fn sum_pipeline(device: &wgpu::Device, features: Features) -> wgpu::ComputePipeline {
-    compute_pipeline(device, "sum", SOURCE, features, "sum", None)
-}
-
-pub(crate) fn sum_instances_pipeline(
-    device: &wgpu::Device,
-    features: Features,
-) -> wgpu::ComputePipeline {
-    compute_pipeline(
-        device,
-        "sum_instances",
-        SOURCE,
-        features,
-        "sum_instances",
-        None,
-    )
+/// The pipeline of entry point `entry` (`min_dt`, `sum`, `sum_instances`).
+pub(crate) fn pipeline(device: &Device, features: Features, entry: &str) -> ComputePipeline {
+    compute_pipeline(device, entry, SOURCE, features, entry, None)
 }
 
 /// Workgroups of `rg` threads for a first-level reduction over `n` items (at most one per `rg`

@@ -1,6 +1,6 @@
 //! WGSL sources: each kernel's file with `shaders/common.wgsl` prepended, and `//#if NAME` ...
 //! `//#else` / `//#endif` blocks kept only for the features a scene needs (so a scene without, say, velocity
-//! boundaries compiles no binding for them); [`compute_pipeline`] compiles one into a pipeline.
+//! boundaries compiles no binding for them); `compute_pipeline` compiles one into a pipeline.
 
 use std::borrow::Cow;
 

@@ -1,5 +1,6 @@
 //! Contact on the device, compiled, allocated and dispatched only for scenes with contact or
-//! rigid walls. The step's CONTACT stage, by file (each beside its WGSL kernel):
+//! rigid walls. The step's CONTACT stage, by file (each beside its WGSL kernel, and each owning its
+//! pipelines and its dispatches):
 //!
 //! - [`search`]: positions of the step, whether a search is due, candidates from a hashed uniform
 //!   grid, the active slots (those that can touch before the next search: a pass slot with
@@ -12,20 +13,28 @@
 //! - [`one`]: on CPU adapters with a small contact set, the stage in two one-workgroup dispatches
 //!   (before and after the search) instead of eight.
 //!
-//! Every kernel binds the one bind group built here (one explicit layout). The host reads back
-//! only the contact counters with each batch's control block; a search that needs more candidate
-//! room or more colouring rounds stops the step before it changed anything, and
-//! [`ContactState::grow`] enlarges what is needed and resumes the step. CPU reference:
+//! Beside them, [`kernels`] holds the compiled kernels of every stage and their layouts,
+//! [`tables`] the contact set's static tables and [`options`] the choice of path. This file holds what the stages share: the parameters ([`ContactParams`], with the
+//! workspace offsets), the contact state ([`ContactState`]: the buffers, the one bind group every
+//! contact kernel binds, built once with one explicit layout, and the host's view of the
+//! counters) and the order of the stages in a step ([`ContactState::record_parts`]). The host
+//! reads back only the contact counters with each batch's control block; a search that needs more
+//! candidate room or more colouring rounds stops the step before it changed anything, and
+//! `ContactState::grow` enlarges what is needed and resumes the step. CPU reference:
 //! [`crate::contact::ContactSet::apply`].
-#![allow(missing_docs)]
 
+pub mod kernels;
 pub mod narrow;
 pub mod one;
+pub mod options;
 pub mod report;
 pub mod search;
 pub mod solve;
+pub mod tables;
 
-use std::borrow::Cow;
+pub use kernels::{stage_source, ContactKernels, MODULES};
+pub(crate) use options::Path;
+pub use options::{one_group, ContactOptions};
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
@@ -35,8 +44,7 @@ use crate::error::{Error, Result};
 use crate::model::Model;
 
 use super::alloc::Alloc;
-use super::shader;
-use super::shader::Features;
+use tables::{GpuSegment, GpuSlot};
 
 /// Shared WGSL declarations of the contact kernels.
 pub const COMMON: &str = include_str!("../../../shaders/contact_common.wgsl");
@@ -64,9 +72,12 @@ pub const MAX_SWEEP_SLOTS: u32 = 80;
 pub const CG: u32 = 64;
 /// Colouring rounds recorded at first.
 pub const FIRST_ROUNDS: u32 = 24;
+/// Indirect entry of the first colour's sweep (colour c: `COLOR_ENTRY + c`), after the search
+/// kernels' entries; written by the search's `scan_lists`.
+pub const COLOR_ENTRY: u32 = search::ENTRIES.len() as u32;
 /// Indirect entry of the kernels over the active slots (narrow phase, slot reports; WGSL
 /// `ACTIVE_ENTRY`), written at each search after the search kernels' and the colours' entries.
-pub const ACTIVE_ENTRY: u32 = 14 + MAX_COLORS;
+pub const ACTIVE_ENTRY: u32 = COLOR_ENTRY + MAX_COLORS;
 /// Stride of the dynamic-offset index entries.
 const INDEX_STRIDE: u64 = 256;
 /// Index entries: colouring rounds and re-checks first, then (colour, sweep) pairs.
@@ -76,7 +87,10 @@ const GROW_CANDIDATES: u32 = 1;
 const GROW_COLORS: u32 = 2;
 const GROW_ROUNDS: u32 = 4;
 
-/// Mirror of WGSL `ContactParams`.
+/// Mirror of WGSL `ContactParams`: the sizes, offsets and choices every contact stage reads
+/// (written by the host, at the start of the contact state `ContactCtl`). The fields without a
+/// doc here are documented once, in `shaders/contact_common.wgsl`.
+#[allow(missing_docs)]
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
 pub struct ContactParams {
@@ -153,7 +167,9 @@ pub struct ContactParams {
     pub f_node: u32,
 }
 
-/// Mirror of the first part of WGSL `ContactCtl` (the counters the host reads back).
+/// Mirror of the first part of WGSL `ContactCtl` after the parameters: the counters the host
+/// reads back with each batch (documented in `shaders/contact_common.wgsl`).
+#[allow(missing_docs)]
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
 pub struct ContactCounters {
@@ -181,186 +197,51 @@ pub const PARAMS_SIZE: u64 = std::mem::size_of::<ContactParams>() as u64;
 /// Bytes of WGSL `ContactCtl`: the parameters, the counters, the per-sweep changes.
 pub const CTL_SIZE: u64 = PARAMS_SIZE + 64 + 4 * MAX_SWEEP_SLOTS as u64 + 16;
 
-/// Mirror of WGSL `Slot`.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuSlot {
-    pub info: u32,
-    pub s: u32,
-    pub np: u32,
-    pub nn: u32,
-    pub normal: [f32; 2],
-    pub point: [f32; 2],
-    pub k: f32,
-    pub pass: u32,
-    pub body: u32,
-    pub mu: f32,
-    /// Penalty friction: the tangential spring over the normal one.
-    pub kt: f32,
-    /// Perturbed Lagrangian: the slots of the neighbours `np`, `nn` in the same pass (`NONE`:
-    /// none), whose candidate segments give their gaps.
-    pub ps: u32,
-    pub ns: u32,
-    /// Augmented Lagrangian: the multipliers' update rate (1/s; 0: another method).
-    pub ar: f32,
-}
-
-/// Mirror of WGSL `Segment`.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuSegment {
-    pub a: u32,
-    pub b: u32,
-    pub k: f32,
-    pub pass: u32,
-    pub body: u32,
-    pub _pad: [u32; 3],
-}
-
-/// Size of WGSL `Cons` (scratch only).
-pub const CONS_SIZE: u64 = 64;
-
 const _: () = assert!(std::mem::size_of::<ContactParams>() == 208);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 64);
-const _: () = assert!(std::mem::size_of::<GpuSlot>() == 64);
-const _: () = assert!(std::mem::size_of::<GpuSegment>() == 32);
 
-/// The compiled contact kernels and their layouts (stateless, built once per device).
-#[derive(Debug)]
-pub struct ContactKernels {
-    layout: wgpu::BindGroupLayout,
-    ind_layout: wgpu::BindGroupLayout,
-    prep: wgpu::ComputePipeline,
-    plan: wgpu::ComputePipeline,
-    /// The search kernels dispatched indirectly, in [`search::ENTRIES`] order.
-    search: Vec<wgpu::ComputePipeline>,
-    scan_lists: wgpu::ComputePipeline,
-    narrow: wgpu::ComputePipeline,
-    gather: wgpu::ComputePipeline,
-    solve_one: wgpu::ComputePipeline,
-    sweep_color: wgpu::ComputePipeline,
-    recheck: wgpu::ComputePipeline,
-    recheck_active: wgpu::ComputePipeline,
-    finish: wgpu::ComputePipeline,
-    report_slots: wgpu::ComputePipeline,
-    report_end: wgpu::ComputePipeline,
-    prep_one: wgpu::ComputePipeline,
-    contact_one: wgpu::ComputePipeline,
+/// What the stages record their dispatches with: the contact bind group (group 0; its dynamic
+/// offset selects an index entry), the indirect sizes and the parameters.
+pub(crate) struct Dispatch<'a> {
+    /// The parameters as last uploaded.
+    pub params: &'a ContactParams,
+    bind: &'a wgpu::BindGroup,
+    ind: &'a wgpu::Buffer,
 }
 
-fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: false },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
+impl Dispatch<'_> {
+    /// Binds group 0 with index entry `entry` (every contact pipeline shares its layout, so it
+    /// stays bound across pipelines: set again only where the entry changes).
+    pub fn bind(&self, pass: &mut wgpu::ComputePass<'_>, entry: u64) {
+        pass.set_bind_group(0, self.bind, &[(entry * INDEX_STRIDE) as u32]);
+    }
+
+    /// `pipeline` over `n` workgroups.
+    pub fn direct(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        pipeline: &wgpu::ComputePipeline,
+        n: u32,
+    ) {
+        pass.set_pipeline(pipeline);
+        pass.dispatch_workgroups(n, 1, 1);
+    }
+
+    /// The pipeline set last, over the workgroups of indirect entry `entry`.
+    pub fn indirect(&self, pass: &mut wgpu::ComputePass<'_>, entry: u64) {
+        pass.dispatch_workgroups_indirect(self.ind, 12 * entry);
+    }
+
+    /// `pipeline` over the active slots of the last search (indirect entry [`ACTIVE_ENTRY`]).
+    pub fn active(&self, pass: &mut wgpu::ComputePass<'_>, pipeline: &wgpu::ComputePipeline) {
+        pass.set_pipeline(pipeline);
+        self.indirect(pass, ACTIVE_ENTRY as u64);
     }
 }
 
-fn uniform_entry(binding: u32, dynamic: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: dynamic,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-/// The contact shader modules: each one's label and stage files (after contact_common.wgsl).
-pub const MODULES: [(&str, &[&str]); 5] = [
-    ("contact_search", &[search::SOURCE]),
-    ("contact_narrow", &[narrow::SOURCE]),
-    ("contact_solve", &[narrow::SOURCE, solve::SOURCE]),
-    ("contact_report", &[narrow::SOURCE, report::SOURCE]),
-    (
-        "contact_one",
-        &[narrow::SOURCE, solve::SOURCE, report::SOURCE, one::SOURCE],
-    ),
-];
-
-/// The complete source of a contact stage: common.wgsl, contact_common.wgsl, then `parts`.
-pub fn stage_source(parts: &[&str], features: Features) -> String {
-    let mut kernel = String::from(COMMON);
-    for p in parts {
-        kernel.push('\n');
-        kernel.push_str(p);
-    }
-    shader::source(&kernel, features)
-}
-
-impl ContactKernels {
-    /// Compiles the contact kernels.
-    pub fn new(device: &wgpu::Device, features: Features) -> Self {
-        let mut entries = Vec::new();
-        entries.extend((1..=16).filter(|&b| b != 10).map(storage_entry));
-        entries.push(uniform_entry(17, true));
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("contact"),
-            entries: &entries,
-        });
-        let ind_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("contact_indirect"),
-            entries: &[storage_entry(0)],
-        });
-        let main = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("contact"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let with_ind = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("contact_indirect"),
-            bind_group_layouts: &[Some(&layout), Some(&ind_layout)],
-            immediate_size: 0,
-        });
-        let module = |label: &str, parts: &[&str]| {
-            device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(label),
-                source: wgpu::ShaderSource::Wgsl(Cow::Owned(stage_source(parts, features))),
-            })
-        };
-        let [search_m, narrow_m, solve_m, report_m, one_m] =
-            MODULES.map(|(label, parts)| module(label, parts));
-        let pipe = |m: &wgpu::ShaderModule, layout: &wgpu::PipelineLayout, entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(layout),
-                module: m,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        ContactKernels {
-            prep: pipe(&search_m, &main, "prep"),
-            plan: pipe(&search_m, &with_ind, "plan"),
-            search: search::ENTRIES
-                .iter()
-                .map(|e| pipe(&search_m, &main, e))
-                .collect(),
-            scan_lists: pipe(&search_m, &with_ind, "scan_lists"),
-            narrow: pipe(&narrow_m, &main, "narrow"),
-            gather: pipe(&narrow_m, &main, "gather"),
-            solve_one: pipe(&solve_m, &main, "solve_one"),
-            sweep_color: pipe(&solve_m, &main, "sweep_color"),
-            recheck: pipe(&solve_m, &main, "recheck"),
-            recheck_active: pipe(&solve_m, &main, "recheck_active"),
-            finish: pipe(&report_m, &main, "finish"),
-            report_slots: pipe(&report_m, &main, "report_slots"),
-            report_end: pipe(&report_m, &main, "report_end"),
-            prep_one: pipe(&search_m, &with_ind, "prep_one"),
-            contact_one: pipe(&one_m, &main, "contact_one"),
-            layout,
-            ind_layout,
-        }
-    }
+/// Workgroups of [`CG`] threads over `n` items (at least one).
+pub(crate) fn groups(n: u32) -> u32 {
+    n.div_ceil(CG).max(1)
 }
 
 /// The shared buffers the contact kernels bind.
@@ -371,12 +252,14 @@ pub(crate) struct Shared<'a> {
     pub sample_src: &'a wgpu::Buffer,
 }
 
-/// Offsets of the workspace arrays.
+/// Sizes of the workspace arrays.
 struct Workspace {
     words: u32,
     vec4s: u32,
 }
 
+/// Lays out the workspace arrays of every stage (`ws`: u32 words, `fws`: vec4) and writes their
+/// offsets into `p`.
 fn layout_workspace(p: &mut ContactParams) -> Workspace {
     let mut at = 0u32;
     let mut take = |n: u32| {
@@ -428,6 +311,30 @@ fn layout_workspace(p: &mut ContactParams) -> Workspace {
     p.f_frow = if one && p.friction != 0 { ftake(ns) } else { 0 };
     p.f_node = if one { ftake(nl + 1) } else { 0 };
     Workspace { words, vec4s: f }
+}
+
+/// The index entries (a `vec4<u32>` each, [`INDEX_STRIDE`] bytes apart) that the dynamic offset
+/// of group 0 selects: colouring rounds and re-checks r = 0.. ([`ROUND_ENTRIES`] of them), then on
+/// the per-colour path one per (colour, sweep).
+fn index_entries(multi: bool) -> Vec<u8> {
+    let entries_n = ROUND_ENTRIES
+        + if multi {
+            MAX_SWEEP_SLOTS as u64 * MAX_COLORS as u64
+        } else {
+            0
+        };
+    let mut index_bytes = vec![0u8; (entries_n * INDEX_STRIDE) as usize];
+    for e in 0..entries_n {
+        let v: [u32; 4] = if e < ROUND_ENTRIES {
+            [e as u32, 0, 0, 0]
+        } else {
+            let r = (e - ROUND_ENTRIES) as u32;
+            [r % MAX_COLORS, r / MAX_COLORS, 0, 0]
+        };
+        let at = (e * INDEX_STRIDE) as usize;
+        index_bytes[at..at + 16].copy_from_slice(bytemuck::bytes_of(&v));
+    }
+    index_bytes
 }
 
 /// Contact buffers, bind groups and the host's view of the device counters.
@@ -484,112 +391,6 @@ fn make_bind(
     })
 }
 
-/// Choices of the contact stage a caller may make (tests, benchmarks); the defaults decide by
-/// adapter and size.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct ContactOptions {
-    /// The per-colour solve path (`Some(true)`) or one workgroup (`Some(false)`); `None`:
-    /// [`multi_path`].
-    pub multi: Option<bool>,
-    /// On the one-workgroup path, the active-set re-checks as their own dispatches over many
-    /// workgroups (`Some(true)`) or inside the solve's workgroup (`Some(false)`); `None`:
-    /// [`split_path`]. The same constraints and arithmetic either way: the same bits on
-    /// lavapipe. On an H100 the two kernels round apart, the sweeps then stop in other sweeps,
-    /// and the striker test's displacements differ by 1.5e-7 m: about as far as either path
-    /// lies from the f64 CPU reference.
-    pub split: Option<bool>,
-    /// The contact stage in one workgroup before the search and one after it (`Some(true)`;
-    /// the one-workgroup solve with its re-checks inside), or the per-item kernels
-    /// (`Some(false)`); `None`: [`one::one_path`] where neither `multi` nor `split` is asked
-    /// for. The same bits either way.
-    pub one: Option<bool>,
-    /// Plain projected Gauss-Seidel sweeps on the one-workgroup path (`true`) instead of the
-    /// extrapolated ones (the default, as on the CPU reference); for comparisons.
-    pub plain_sweeps: bool,
-    /// Initial candidate capacity (words); `None`: 4 per slot, at least 1024. A search that
-    /// needs more grows the buffer.
-    pub candidate_capacity: Option<u32>,
-    /// Threads of the one-workgroup contact kernels (the search's scans, the one-workgroup
-    /// solve, the reports' end), a power of two from 8 to 256; `None`: [`one_group`]. Every
-    /// size gives the same node bits (their sums are of integers, or per constraint within a
-    /// colour); only the reports' float sums change order.
-    pub group: Option<u32>,
-}
-
-/// Threads of the one-workgroup contact kernels on an adapter of `device_type`: 256 on GPUs, 8
-/// on CPU adapters. On lavapipe one workgroup runs on one core in lane groups of 8, and each
-/// barrier of a larger group switches between them: the 10^5-element striker's solve took
-/// 1.78 ms a step with 64 threads, 1.24 ms with 8 (BENCHMARKS.md, session 18).
-pub fn one_group(device_type: wgpu::DeviceType) -> u32 {
-    if device_type == wgpu::DeviceType::Cpu {
-        8
-    } else {
-        256
-    }
-}
-
-/// How a scene's contact stage is solved and dispatched.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Path {
-    /// The per-colour solve path (else one workgroup).
-    pub multi: bool,
-    /// On the one-workgroup path, the re-checks as their own dispatches.
-    pub split: bool,
-    /// On the one-workgroup path, extrapolated sweeps.
-    pub extrapolate: bool,
-    /// The stage in one workgroup before the search and one after it ([`one`]).
-    pub one: bool,
-}
-
-impl Path {
-    /// The path `options` ask for, the rest by [`multi_path`], [`split_path`] and
-    /// [`one::one_path`] for `nodes` contact nodes and `slots` slots.
-    ///
-    /// # Errors
-    /// [`Error::Gpu`] when `options` ask for one workgroup with the per-colour path or split
-    /// re-checks.
-    pub fn choose(
-        options: &ContactOptions,
-        nodes: usize,
-        slots: usize,
-        device_type: wgpu::DeviceType,
-    ) -> Result<Path> {
-        let multi = options
-            .multi
-            .unwrap_or_else(|| multi_path(slots, device_type));
-        let split = options
-            .split
-            .unwrap_or_else(|| split_path(slots, device_type));
-        let one = options
-            .one
-            .unwrap_or_else(|| !multi && !split && one::one_path(nodes, device_type));
-        if one && (multi || split) {
-            return Err(Error::Gpu(
-                "the contact stage in one workgroup takes neither the per-colour solve nor split \
-                 re-checks"
-                    .into(),
-            ));
-        }
-        Ok(Path {
-            multi,
-            split,
-            extrapolate: !options.plain_sweeps,
-            one,
-        })
-    }
-}
-
-/// Whether the per-colour path is used for `slots` slots on an adapter of `device_type`.
-pub fn multi_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
-    device_type != wgpu::DeviceType::Cpu && slots >= solve::MULTI_SLOTS
-}
-
-/// Whether the one-workgroup solve leaves its re-checks to their own dispatches, for `slots`
-/// slots on an adapter of `device_type` (see [`solve::SPLIT_SLOTS`]).
-pub fn split_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
-    device_type != wgpu::DeviceType::Cpu && slots >= solve::SPLIT_SLOTS
-}
-
 impl ContactState {
     /// Buffers of `set` (the model's contacts); `alloc` records each buffer for the plan report.
     /// `path`: the solve path and how the stage is dispatched.
@@ -613,79 +414,13 @@ impl ContactState {
         } = path;
         let t = set.tables();
         let nl = t.nodes.len();
-        let c_ref: Vec<[f32; 4]> = t
-            .reference
-            .iter()
-            .zip(&t.inv_mass)
-            .map(|(x, im)| [x[0] as f32, x[1] as f32, im[0] as f32, im[1] as f32])
-            .collect();
-        let node_words: Vec<[u32; 2]> = t
-            .nodes
-            .iter()
-            .zip(&t.mass)
-            .map(|(&g, &m)| [g, (m as f32).to_bits()])
-            .collect();
-        let slots: Vec<GpuSlot> = t
-            .slots
-            .iter()
-            .map(|s| GpuSlot {
-                info: s.interface
-                    | (u32::from(s.penalty) << 16)
-                    | (u32::from(s.wall) << 17)
-                    | (u32::from(s.second_is_slave) << 18)
-                    | (u32::from(s.group) << 19)
-                    | (u32::from(s.self_contact) << 20)
-                    | (u32::from(s.perturbed) << 21),
-                s: s.node,
-                np: s.neighbours[0],
-                nn: s.neighbours[1],
-                normal: s.normal.map(|x| x as f32),
-                point: s.point.map(|x| x as f32),
-                k: s.stiffness as f32,
-                pass: s.pass,
-                body: s.body,
-                mu: s.friction as f32,
-                kt: s.friction_stiffness as f32,
-                ps: s.neighbour_slots[0],
-                ns: s.neighbour_slots[1],
-                ar: s.augmentation as f32,
-            })
-            .collect();
-        let segs: Vec<GpuSegment> = t
-            .segments
-            .iter()
-            .map(|s| GpuSegment {
-                a: s.nodes[0],
-                b: s.nodes[1],
-                k: s.stiffness as f32,
-                pass: s.pass,
-                body: s.body,
-                _pad: [0; 3],
-            })
-            .collect();
+        let c_ref = tables::reference(&t);
+        let node_words = tables::node_words(&t);
+        let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
+        let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
         let names = set.names();
+        let iface = tables::interface_starts(&t, names.len())?;
         let ni = names.len() as u32;
-        if ni > 0xffff {
-            return Err(Error::Gpu(format!(
-                "the GPU backend supports at most 65535 contacts and walls (scene has {ni})"
-            )));
-        }
-        // Each interface's slots are contiguous (passes, then walls, in interface order).
-        let mut iface = vec![u32::MAX; ni as usize + 1];
-        for (k, s) in t.slots.iter().enumerate().rev() {
-            iface[s.interface as usize] = k as u32;
-        }
-        iface[ni as usize] = slots.len() as u32;
-        for f in (0..ni as usize).rev() {
-            if iface[f] == u32::MAX {
-                iface[f] = iface[f + 1];
-            }
-        }
-        if t.slots.windows(2).any(|w| w[1].interface < w[0].interface) {
-            return Err(Error::Gpu(
-                "contact slots are not grouped by interface".into(),
-            ));
-        }
         // Words per history row: the contact energy, with friction the friction work, then per
         // interface fx, fy, the largest penetration, the active nodes and with friction ft.
         let friction = t.slots.iter().any(|s| s.friction > 0.0);
@@ -737,23 +472,24 @@ impl ContactState {
         let st = U::STORAGE;
         let nodes_buf = alloc.init("contact_nodes", bytemuck::cast_slice(&node_words), st);
         let ref_buf = alloc.init("contact_reference", bytemuck::cast_slice(&c_ref), st);
+        // Storage bindings may not be empty: a scene without slots (or with walls only, without
+        // segments) binds one unused record.
         let slot_words = if slots.is_empty() {
             vec![GpuSlot::default()]
         } else {
-            slots.clone()
+            slots
         };
         let slots_buf = alloc.init("contact_slots", bytemuck::cast_slice(&slot_words), st);
-        // Storage bindings may not be empty: a scene with walls only binds one unused segment.
         let seg_words = if segs.is_empty() {
             vec![GpuSegment::default()]
         } else {
-            segs.clone()
+            segs
         };
         let segs_buf = alloc.init("contact_segments", bytemuck::cast_slice(&seg_words), st);
         let pv = alloc.init("contact_nodal", bytemuck::cast_slice(&init_pv), st);
         let cons = alloc.init(
             "contact_constraints",
-            &vec![0u8; (CONS_SIZE as usize) * slots.len().max(1)],
+            &vec![0u8; (narrow::CONS_SIZE as usize) * (n_slots as usize).max(1)],
             st,
         );
         let mut ctl_init = vec![0u8; CTL_SIZE as usize];
@@ -784,26 +520,9 @@ impl ContactState {
             &vec![0u8; 12 * (ACTIVE_ENTRY as usize + 1)],
             st | U::INDIRECT,
         );
-        let entries_n = ROUND_ENTRIES
-            + if multi {
-                MAX_SWEEP_SLOTS as u64 * MAX_COLORS as u64
-            } else {
-                0
-            };
-        let mut index_bytes = vec![0u8; (entries_n * INDEX_STRIDE) as usize];
-        for e in 0..entries_n {
-            let v: [u32; 4] = if e < ROUND_ENTRIES {
-                [e as u32, 0, 0, 0]
-            } else {
-                let r = (e - ROUND_ENTRIES) as u32;
-                [r % MAX_COLORS, r / MAX_COLORS, 0, 0]
-            };
-            let at = (e * INDEX_STRIDE) as usize;
-            index_bytes[at..at + 16].copy_from_slice(bytemuck::bytes_of(&v));
-        }
         let index = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("contact_index"),
-            contents: &index_bytes,
+            contents: &index_entries(multi),
             usage: U::UNIFORM,
         });
         alloc.record("contact_index", index.size());
@@ -825,15 +544,8 @@ impl ContactState {
             (16, history.clone()),
             (17, index.clone()),
         ];
-        let bind = make_bind(device, &kernels.layout, &entries);
-        let ind_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("contact_indirect"),
-            layout: &kernels.ind_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: ind.as_entire_binding(),
-            }],
-        });
+        let bind = make_bind(device, &kernels.layouts.shared, &entries);
+        let ind_bind = search::bind_indirect(device, &kernels.layouts.indirect, &ind);
         Ok(ContactState {
             params,
             set,
@@ -895,103 +607,40 @@ impl ContactState {
     /// workgroup ([`ContactState::one`]) the narrow part is the whole stage after the search,
     /// and the solve and report parts record nothing.
     pub fn record_parts(&self, k: &ContactKernels, pass: &mut wgpu::ComputePass<'_>, parts: u32) {
-        let p = &self.params;
-        let g = |n: u32| n.div_ceil(CG).max(1);
-        // Group 0 is set once (offset 0) and again only where its index offset changes: every
-        // contact pipeline shares its layout, so it stays bound across pipelines.
-        let bind = |pass: &mut wgpu::ComputePass<'_>, entry: u64| {
-            pass.set_bind_group(0, &self.bind, &[(entry * INDEX_STRIDE) as u32]);
+        let d = Dispatch {
+            params: &self.params,
+            bind: &self.bind,
+            ind: &self.ind,
         };
-        let direct = |pass: &mut wgpu::ComputePass<'_>, pl: &wgpu::ComputePipeline, n: u32| {
-            pass.set_pipeline(pl);
-            pass.dispatch_workgroups(n, 1, 1);
-        };
-        bind(pass, 0);
+        // Group 0 is set once (offset 0) and again only where its index offset changes.
+        d.bind(pass, 0);
         pass.set_bind_group(1, &self.ind_bind, &[]);
-        if parts & PART_PREP != 0 {
+        let on = |part: u32| parts & part != 0;
+        if on(PART_PREP) {
             if self.one {
-                direct(pass, &k.prep_one, 1);
+                k.one.record_prep(&d, pass);
             } else {
-                direct(pass, &k.prep, g(p.n_local));
-                direct(pass, &k.plan, 1);
+                k.search.record_prep(&d, pass);
             }
         }
-        for (e, pl) in k.search.iter().enumerate() {
-            if parts & PART_SEARCH == 0 {
-                break;
-            }
-            // The one-workgroup solve colours the step's constraints itself: no colouring of
-            // the slots at the search.
-            if p.multi == 0 && e >= 11 {
-                break;
-            }
-            if e == 11 {
-                pass.set_pipeline(pl);
-                for r in 0..p.jp_rounds {
-                    bind(pass, r as u64);
-                    pass.dispatch_workgroups_indirect(&self.ind, 12 * e as u64);
-                }
-                bind(pass, 0);
-                continue;
-            }
-            if e == 13 {
-                direct(pass, &k.scan_lists, 1);
-            }
-            pass.set_pipeline(pl);
-            pass.dispatch_workgroups_indirect(&self.ind, 12 * e as u64);
+        if on(PART_SEARCH) {
+            k.search.record(&d, pass);
         }
         if self.one {
             // Narrow phase to reports in one dispatch (timed as the narrow part).
-            if parts & PART_NARROW != 0 {
-                direct(pass, &k.contact_one, 1);
+            if on(PART_NARROW) {
+                k.one.record(&d, pass);
             }
             return;
         }
-        let active = |pass: &mut wgpu::ComputePass<'_>, pl: &wgpu::ComputePipeline| {
-            pass.set_pipeline(pl);
-            pass.dispatch_workgroups_indirect(&self.ind, 12 * ACTIVE_ENTRY as u64);
-        };
-        if parts & PART_NARROW != 0 {
-            active(pass, &k.narrow);
-            direct(pass, &k.gather, g(p.n_local));
+        if on(PART_NARROW) {
+            k.narrow.record(&d, pass);
         }
-        let solve = parts & PART_SOLVE != 0;
-        if solve && p.multi == 0 && p.split != 0 {
-            // Round r of the solve, then its re-check r over the active slots (index entry r).
-            let rounds = crate::contact::ACTIVE_SET_ROUNDS as u64;
-            for r in 0..=rounds {
-                bind(pass, r);
-                direct(pass, &k.solve_one, 1);
-                if r < rounds {
-                    active(pass, &k.recheck_active);
-                }
-            }
-            bind(pass, 0);
-        } else if solve && p.multi == 0 {
-            direct(pass, &k.solve_one, 1);
-        } else if solve {
-            let rounds = MAX_SWEEP_SLOTS / p.max_sweeps;
-            for r in 0..rounds {
-                pass.set_pipeline(&k.sweep_color);
-                for s in 0..p.max_sweeps {
-                    let q = r * p.max_sweeps + s;
-                    for c in 0..p.colors_recorded {
-                        bind(pass, ROUND_ENTRIES + (q * MAX_COLORS + c) as u64);
-                        pass.dispatch_workgroups_indirect(&self.ind, 12 * (14 + c as u64));
-                    }
-                }
-                if r + 1 < rounds {
-                    pass.set_pipeline(&k.recheck);
-                    bind(pass, r as u64);
-                    pass.dispatch_workgroups(g(p.n_slots), 1, 1);
-                }
-            }
-            bind(pass, 0);
+        if on(PART_SOLVE) {
+            k.solve.record(&d, pass);
         }
-        if parts & PART_REPORT != 0 {
-            direct(pass, &k.finish, g(p.n_local));
-            active(pass, &k.report_slots);
-            direct(pass, &k.report_end, 1);
+        if on(PART_REPORT) {
+            k.report.record(&d, pass);
         }
     }
 
@@ -1019,7 +668,7 @@ impl ContactState {
                 e.1 = self.grow_buf.clone();
             }
         }
-        self.bind = make_bind(device, &kernels.layout, &self.entries);
+        self.bind = make_bind(device, &kernels.layouts.shared, &self.entries);
     }
 
     /// The candidate buffer now in use.

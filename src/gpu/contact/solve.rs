@@ -1,11 +1,18 @@
 //! The diagonal-mass Lagrange correction on the device (`shaders/contact_solve.wgsl`): projected
 //! Gauss-Seidel over the colours of the last search and the active-set update, either in one
 //! workgroup (`solve_one`, its re-checks inside it or, with many slots, in `recheck_active`
-//! over many workgroups) or one dispatch per colour and sweep (`sweep_color`, `recheck`). CPU
-//! reference: the sweeps and re-check of [`crate::contact::ContactSet::apply`].
+//! over many workgroups) or one dispatch per colour and sweep (`sweep_color`, `recheck`); the
+//! choice of path by size, the pipelines and their dispatches. CPU reference: the sweeps and
+//! re-check of [`crate::contact::ContactSet::apply`] (`crate::contact::solve`).
+
+use super::kernels::stage_kernels;
+use super::{groups, Dispatch, COLOR_ENTRY, MAX_COLORS, MAX_SWEEP_SLOTS, ROUND_ENTRIES};
 
 /// WGSL source (compiled after [`super::narrow::SOURCE`]).
 pub const SOURCE: &str = include_str!("../../../shaders/contact_solve.wgsl");
+
+/// The solve's shader module: its label and stage files (after contact_common.wgsl).
+pub const MODULE: (&str, &[&str]) = ("contact_solve", &[super::narrow::SOURCE, SOURCE]);
 
 /// Sweeps per solve at most on the device (one-workgroup path), as on the CPU.
 pub const MAX_SWEEPS: u32 = crate::contact::MAX_SWEEPS as u32;
@@ -35,9 +42,67 @@ pub const MULTI_SLOTS: usize = 1 << 20;
 /// workgroup does serially. Split, a step records 4 re-checks and 4 more rounds of `solve_one`,
 /// most of which return at once.
 ///
-/// Measured on an NVIDIA H100 (BENCHMARKS.md, session 16; device time of the solve part, the
-/// disks in contact): the 10^6-element pile (480 000 slots) 335 -> 134 us a step split, the
-/// step 1 070 -> 855 us; the 10^5 pile (49 152 slots) 47 -> 51 us, and the 10^5 striker
+/// Measured on an NVIDIA H100 (BENCHMARKS.md, 2026-11-24, d7fa36a; device time of the solve
+/// part, the disks in contact): the 10^6-element pile (480 000 slots) 335 -> 134 us a step
+/// split, the step 1 070 -> 855 us; the 10^5 pile (49 152 slots) 47 -> 51 us, and the 10^5 striker
 /// (about 2 000 slots, 100 sweeps a step) 1 038 -> 1 068 us: below this size the extra
 /// dispatches cost more than the re-checks they spread.
 pub const SPLIT_SLOTS: usize = 1 << 16;
+
+/// Whether the per-colour path is used for `slots` slots on an adapter of `device_type`.
+pub fn multi_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
+    device_type != wgpu::DeviceType::Cpu && slots >= MULTI_SLOTS
+}
+
+/// Whether the one-workgroup solve leaves its re-checks to their own dispatches, for `slots`
+/// slots on an adapter of `device_type` (see [`SPLIT_SLOTS`]).
+pub fn split_path(slots: usize, device_type: wgpu::DeviceType) -> bool {
+    device_type != wgpu::DeviceType::Cpu && slots >= SPLIT_SLOTS
+}
+
+stage_kernels! {
+    /// The solve's pipelines: the one-workgroup path's (`solve_one`, `recheck_active`) and the
+    /// per-colour path's (`sweep_color`, `recheck`).
+    SolveKernels: solve_one, recheck_active, sweep_color, recheck
+}
+
+impl SolveKernels {
+    /// Records the solve on the path of the parameters: in one workgroup (split: each round of
+    /// `solve_one`, index entry r, then its re-check over the active slots), or per colour (the
+    /// sweeps recorded ahead, one dispatch per colour and sweep, index entry (colour, sweep), and
+    /// a re-check after each round's sweeps).
+    pub(crate) fn record(&self, d: &Dispatch<'_>, pass: &mut wgpu::ComputePass<'_>) {
+        let p = d.params;
+        if p.multi == 0 && p.split != 0 {
+            let rounds = crate::contact::ACTIVE_SET_ROUNDS as u64;
+            for r in 0..=rounds {
+                d.bind(pass, r);
+                d.direct(pass, &self.solve_one, 1);
+                if r < rounds {
+                    d.active(pass, &self.recheck_active);
+                }
+            }
+            d.bind(pass, 0);
+        } else if p.multi == 0 {
+            d.direct(pass, &self.solve_one, 1);
+        } else {
+            let rounds = MAX_SWEEP_SLOTS / p.max_sweeps;
+            for r in 0..rounds {
+                pass.set_pipeline(&self.sweep_color);
+                for s in 0..p.max_sweeps {
+                    let q = r * p.max_sweeps + s;
+                    for c in 0..p.colors_recorded {
+                        d.bind(pass, ROUND_ENTRIES + (q * MAX_COLORS + c) as u64);
+                        d.indirect(pass, (COLOR_ENTRY + c) as u64);
+                    }
+                }
+                if r + 1 < rounds {
+                    pass.set_pipeline(&self.recheck);
+                    d.bind(pass, r as u64);
+                    pass.dispatch_workgroups(groups(p.n_slots), 1, 1);
+                }
+            }
+            d.bind(pass, 0);
+        }
+    }
+}

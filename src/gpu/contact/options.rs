@@ -1,0 +1,105 @@
+//! How a scene's contact stage is solved and dispatched on the device: the choices a caller may
+//! make ([`ContactOptions`]) and the path taken (`Path`), decided by adapter and size where not
+//! asked for ([`super::solve::multi_path`], [`super::solve::split_path`],
+//! [`super::one::one_path`], [`one_group`]). The CPU reference has one path
+//! ([`crate::contact::ContactSet::apply`]); every device path gives its results within the
+//! solve's accuracy of it, and the paths that differ only in their dispatches the same bits.
+
+use crate::error::{Error, Result};
+
+use super::{one, solve};
+
+/// Choices of the contact stage a caller may make (tests, benchmarks); the defaults decide by
+/// adapter and size.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ContactOptions {
+    /// The per-colour solve path (`Some(true)`) or one workgroup (`Some(false)`); `None`:
+    /// [`solve::multi_path`].
+    pub multi: Option<bool>,
+    /// On the one-workgroup path, the active-set re-checks as their own dispatches over many
+    /// workgroups (`Some(true)`) or inside the solve's workgroup (`Some(false)`); `None`:
+    /// [`solve::split_path`]. The same constraints and arithmetic either way: the same bits on
+    /// lavapipe. On an H100 the two kernels round apart, the sweeps then stop in other sweeps,
+    /// and the striker test's displacements differ by 1.5e-7 m: about as far as either path
+    /// lies from the f64 CPU reference.
+    pub split: Option<bool>,
+    /// The contact stage in one workgroup before the search and one after it (`Some(true)`;
+    /// the one-workgroup solve with its re-checks inside), or the per-item kernels
+    /// (`Some(false)`); `None`: [`one::one_path`] where neither `multi` nor `split` is asked
+    /// for. The same bits either way.
+    pub one: Option<bool>,
+    /// Plain projected Gauss-Seidel sweeps on the one-workgroup path (`true`) instead of the
+    /// extrapolated ones (the default, as on the CPU reference); for comparisons.
+    pub plain_sweeps: bool,
+    /// Initial candidate capacity (words); `None`: 4 per slot, at least 1024. A search that
+    /// needs more grows the buffer.
+    pub candidate_capacity: Option<u32>,
+    /// Threads of the one-workgroup contact kernels (the search's scans, the one-workgroup
+    /// solve, the reports' end), a power of two from 8 to 256; `None`: [`one_group`]. Every
+    /// size gives the same node bits (their sums are of integers, or per constraint within a
+    /// colour); only the reports' float sums change order.
+    pub group: Option<u32>,
+}
+
+/// Threads of the one-workgroup contact kernels on an adapter of `device_type`: 256 on GPUs, 8
+/// on CPU adapters. On lavapipe one workgroup runs on one core in lane groups of 8, and each
+/// barrier of a larger group switches between them: the 10^5-element striker's solve took
+/// 1.78 ms a step with 64 threads, 1.24 ms with 8 (BENCHMARKS.md, 2026-11-24, dd3f611).
+pub fn one_group(device_type: wgpu::DeviceType) -> u32 {
+    if device_type == wgpu::DeviceType::Cpu {
+        8
+    } else {
+        256
+    }
+}
+
+/// How a scene's contact stage is solved and dispatched.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Path {
+    /// The per-colour solve path (else one workgroup).
+    pub multi: bool,
+    /// On the one-workgroup path, the re-checks as their own dispatches.
+    pub split: bool,
+    /// On the one-workgroup path, extrapolated sweeps.
+    pub extrapolate: bool,
+    /// The stage in one workgroup before the search and one after it ([`one`]).
+    pub one: bool,
+}
+
+impl Path {
+    /// The path `options` ask for, the rest by [`solve::multi_path`], [`solve::split_path`] and
+    /// [`one::one_path`] for `nodes` contact nodes and `slots` slots.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when `options` ask for one workgroup with the per-colour path or split
+    /// re-checks.
+    pub fn choose(
+        options: &ContactOptions,
+        nodes: usize,
+        slots: usize,
+        device_type: wgpu::DeviceType,
+    ) -> Result<Path> {
+        let multi = options
+            .multi
+            .unwrap_or_else(|| solve::multi_path(slots, device_type));
+        let split = options
+            .split
+            .unwrap_or_else(|| solve::split_path(slots, device_type));
+        let one = options
+            .one
+            .unwrap_or_else(|| !multi && !split && one::one_path(nodes, device_type));
+        if one && (multi || split) {
+            return Err(Error::Gpu(
+                "the contact stage in one workgroup takes neither the per-colour solve nor split \
+                 re-checks"
+                    .into(),
+            ));
+        }
+        Ok(Path {
+            multi,
+            split,
+            extrapolate: !options.plain_sweeps,
+            one,
+        })
+    }
+}

@@ -1,0 +1,112 @@
+//! Test hooks of the GPU solver: the contact search's candidates and active slots read back
+//! from the device (checked against the CPU reference's broad phase, `crate::contact::broad`, in
+//! `tests/gpu/general.rs`), the grow events, and the element stage run alone on given nodes
+//! (against [`crate::element::evaluate`] in `tests/gpu.rs`).
+
+use crate::error::{Error, Result};
+
+use super::GpuSolver;
+
+impl GpuSolver {
+    /// Times a contact buffer grew (the candidates) or a colouring was enlarged during the run.
+    pub fn contact_grows(&self) -> u32 {
+        self.state.contact.as_ref().map_or(0, |c| c.grows)
+    }
+
+    /// Test hook: each slot's candidate segments from the last device search ([`crate::contact::Tables`]
+    /// numbering), read back from the device (one extra readback).
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the scene has no contact or the device is lost.
+    pub fn contact_candidates(&mut self) -> Result<Vec<Vec<u32>>> {
+        let Some(c) = self.state.contact.as_ref() else {
+            return Err(Error::Gpu("the scene has no contact".into()));
+        };
+        let p = c.params;
+        let (Some(ws), Some(grow)) = (c.binding(13).cloned(), c.binding(14).cloned()) else {
+            return Err(Error::Gpu("contact buffers missing".into()));
+        };
+        let n = p.n_slots as u64;
+        let off_bytes = 4 * (n + 1);
+        let cand_bytes = 4 * p.cand_capacity as u64;
+        let bytes = self.read_copies(
+            "candidates_readback",
+            &[
+                (&ws, 4 * p.o_coff as u64, off_bytes),
+                (&grow, 0, cand_bytes),
+            ],
+        )?;
+        let w: &[u32] = bytemuck::cast_slice(&bytes);
+        let (off, cand) = w.split_at(n as usize + 1);
+        Ok((0..n as usize)
+            .map(|k| cand[off[k] as usize..off[k + 1] as usize].to_vec())
+            .collect())
+    }
+
+    /// Test hook: the active slots of the last device search (those that can have a constraint
+    /// until the next: a pass slot with candidates, a wall slot near its wall), in slot order
+    /// ([`crate::contact::Tables`] numbering), read back from the device (one extra readback).
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the scene has no contact or the device is lost.
+    pub fn contact_active_slots(&mut self) -> Result<Vec<u32>> {
+        let Some(c) = self.state.contact.as_ref() else {
+            return Err(Error::Gpu("the scene has no contact".into()));
+        };
+        let p = c.params;
+        let Some(ws) = c.binding(13).cloned() else {
+            return Err(Error::Gpu("contact buffers missing".into()));
+        };
+        let n = p.n_slots as u64;
+        let bytes = self.read_copies(
+            "active_readback",
+            &[
+                (&ws, 4 * (p.o_aoff as u64 + n), 4),
+                (&ws, 4 * p.o_alist as u64, 4 * n.max(1)),
+            ],
+        )?;
+        let w: &[u32] = bytemuck::cast_slice(&bytes);
+        let count = (w[0] as usize).min(n as usize);
+        Ok(w[1..1 + count].to_vec())
+    }
+
+    /// Kernel test hook: uploads displacements `u` and half-step velocities `v`, runs the element
+    /// stage once, and returns each element's nodal forces and stable step.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the device is lost.
+    #[allow(clippy::type_complexity)]
+    pub fn element_stage(
+        &mut self,
+        u: &[[f64; 2]],
+        v: &[[f64; 2]],
+    ) -> Result<(Vec<[[f64; 2]; 4]>, Vec<f64>)> {
+        let data: Vec<[f32; 4]> = u
+            .iter()
+            .zip(v)
+            .map(|(u, v)| [u[0] as f32, u[1] as f32, v[0] as f32, v[1] as f32])
+            .collect();
+        self.ctx
+            .queue
+            .write_buffer(&self.state.nodes, 0, bytemuck::cast_slice(&data));
+        let ne = self.state.params.n_elems as u64;
+        let enc = self.encode_pass("element", |pass| {
+            self.state.record_element(&self.kernels, pass)
+        });
+        self.ctx.queue.submit([enc.finish()]);
+        let (force, dt) = (self.state.elem_force.clone(), self.state.elem_dt.clone());
+        let bytes = self.read_copies(
+            "element_readback",
+            &[(&force, 0, 32 * ne), (&dt, 0, 4 * ne)],
+        )?;
+        let f: &[f32] = bytemuck::cast_slice(&bytes);
+        let n = ne as usize;
+        let forces = (0..n)
+            .map(|e| {
+                std::array::from_fn(|a| [f[8 * e + 2 * a] as f64, f[8 * e + 2 * a + 1] as f64])
+            })
+            .collect();
+        let dt = (0..n).map(|e| f[8 * n + e] as f64).collect();
+        Ok((forces, dt))
+    }
+}
