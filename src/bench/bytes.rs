@@ -18,7 +18,8 @@
 
 use std::mem::size_of;
 
-use crate::gpu::layout::{Control, GpuBody, GpuElement, Params};
+use crate::gpu::element::{GpuBody, GpuElement};
+use crate::gpu::layout::{Control, Params};
 use crate::gpu::shader::Features;
 
 /// One buffer as one kernel of a step touches it.
