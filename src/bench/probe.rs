@@ -1,5 +1,5 @@
 //! The device probe's report (`ricochet bench --probe`): the adapter, the streaming bandwidth
-//! of a vec4<f32> copy and the dispatch floor measured by [`crate::gpu::probe`], and the bound
+//! of a `vec4<f32>` copy and the dispatch floor measured by [`crate::gpu::probe`], and the bound
 //! that bandwidth puts on the bench block's throughput at the bytes per element-cycle of
 //! [`super::bytes`]. GPU only: the probe times a device.
 

@@ -1,12 +1,12 @@
 //! Device probes (`shaders/probe.wgsl`), no part of a step: what a kernel reaches through wgpu on
-//! this adapter. [`bandwidth`] times a vec4<f32> copy between two buffers (512 MiB each by
+//! this adapter. [`bandwidth`] times a `vec4<f32>` copy between two buffers (512 MiB each by
 //! default, or the adapter's largest storage binding): the streaming bandwidth that the element
 //! and node kernels could reach. [`dispatch_floor`] times many dispatches that do nothing in one
 //! pass: what a dispatch costs before any work. Both time the device with timestamp queries
 //! where the adapter has them, and the wall clock always. The CPU reference of the copy is
 //! [`pattern`]: after `fill` and `copy` the destination holds it ([`copied`];
 //! `tests/gpu/device.rs` compares the two). `ricochet bench --probe` reports them
-//! ([`crate::bench::probe`]).
+//! ([`crate::bench::probe()`]).
 
 use std::time::Instant;
 
@@ -370,7 +370,7 @@ fn elements_for(ctx: &GpuContext, bytes: u64) -> u64 {
     (bytes.min(max) / ELEMENT_BYTES).max(1)
 }
 
-/// Times `repeats` vec4<f32> copies of `bytes` bytes (at most the adapter's largest storage
+/// Times `repeats` `vec4<f32>` copies of `bytes` bytes (at most the adapter's largest storage
 /// binding; each copy reads that many and writes that many), one submission each after an
 /// untimed one, and checks what the last one wrote.
 ///

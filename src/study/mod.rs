@@ -6,7 +6,7 @@
 //! them on this machine as child processes of the ricochet binary (one worker per hardware GPU
 //! adapter, else per CPU core), [`slurm`] writes and submits a Slurm job array that runs them on
 //! a cluster, [`threshold`] searches for the value of one parameter at which a condition flips,
-//! and [`collect`] joins every case's parameters, status and figures into `results.csv` and
+//! and [`collect`](mod@collect) joins every case's parameters, status and figures into `results.csv` and
 //! `results.json`. Nothing here prints or exits: the command line (`ricochet study`, `collect`,
 //! `check`, `plot`) and the Python binding call these functions. Host-side only, no GPU twin
 //! (the cases' runs choose their backend as `ricochet run` does).

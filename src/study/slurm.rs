@@ -6,7 +6,7 @@
 //! Each array task runs its case as the local runner does ([`super::local`]): a case whose run
 //! ended (completed or failed in its `summary.json`) is left alone, one with a checkpoint
 //! continues from it (`ricochet run --restart`), any other runs from the start; the output goes to
-//! the case's `run.log` and the exit status to its `exit` file, so that [`super::collect`] reads
+//! the case's `run.log` and the exit status to its `exit` file, so that [`super::collect()`] reads
 //! the same folder whichever ran it. `--signal=B:TERM@S` has Slurm send SIGTERM to the task's
 //! shell S seconds before its time limit; the shell passes it to the run, which writes its
 //! checkpoint and stops, and the task then requeues itself (`scontrol requeue`, allowed by

@@ -1,4 +1,4 @@
-//! The checks of a study file's tables ([`Check`]): names, keywords, counts, each
+//! The checks of a study file's tables (`Check`): names, keywords, counts, each
 //! `[[parameter]]`, `[[collect]]` and `[threshold]` against the others, and the number of cases;
 //! each refusal an [`Error::Invalid`] naming the study file, the key and the value. What
 //! [`super::spec::Study::parse`] calls. Host-side only, no GPU twin.
