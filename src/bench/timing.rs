@@ -16,19 +16,7 @@ use crate::step::Solver;
 /// Rounds by default: each variant is timed this many times, alternating, and medians reported.
 pub const DEFAULT_ROUNDS: u32 = 5;
 
-/// The median of `x` (NaN when empty).
-pub(super) fn median(mut x: Vec<f64>) -> f64 {
-    if x.is_empty() {
-        return f64::NAN;
-    }
-    x.sort_by(f64::total_cmp);
-    let n = x.len();
-    if n % 2 == 1 {
-        x[n / 2]
-    } else {
-        0.5 * (x[n / 2 - 1] + x[n / 2])
-    }
-}
+pub(super) use crate::gpu::probe::median;
 
 /// The bare element-and-update loop on the CPU: what the element kernel does every step (gather,
 /// stress, hourglass and bulk-viscosity forces scattered to the nodes, the dissipative state and

@@ -210,8 +210,8 @@ fn read(ctx: &GpuContext, buffer: &wgpu::Buffer, len: u64) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// The median of `x` (NaN when empty).
-fn median(mut x: Vec<f64>) -> f64 {
+/// The median of `x` (NaN when empty); also the bench's.
+pub fn median(mut x: Vec<f64>) -> f64 {
     if x.is_empty() {
         return f64::NAN;
     }

@@ -5,7 +5,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::read::History;
-use super::style::{finite_extent, text, tick, PALETTE};
+use super::style::{bounds, text, tick, PALETTE};
 
 /// Width and height of a chart in pixels.
 pub const SIZE: (u32, u32) = (1000, 600);
@@ -61,21 +61,6 @@ pub fn velocity_lines(h: &History) -> Vec<Line> {
             (format!("{body} {comp}"), h.values(k))
         })
         .collect()
-}
-
-/// The axis range of `values`: their finite extent with 5 % of room on each side.
-fn bounds<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
-    let Some((lo, hi)) = finite_extent(values) else {
-        return (0.0, 1.0);
-    };
-    let pad = if hi > lo {
-        0.05 * (hi - lo)
-    } else if hi != 0.0 {
-        0.05 * hi.abs()
-    } else {
-        1.0
-    };
-    (lo - pad, hi + pad)
 }
 
 /// Draws `lines` against `time` on `root`, with `error` (label, values) on a second axis at the

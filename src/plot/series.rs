@@ -5,28 +5,13 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::style::{finite_extent, text, tick, PALETTE};
+use super::style::{bounds, text, tick, PALETTE};
 
 /// One series: its label and its points (x, y), drawn in x order.
 pub type Series = (String, Vec<(f64, f64)>);
 
 /// The legend lists at most this many series.
 const LEGEND_MAX: usize = 16;
-
-/// The range of `values` with 5 % of room on each side.
-fn bounds<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
-    let Some((lo, hi)) = finite_extent(values) else {
-        return (0.0, 1.0);
-    };
-    let pad = if hi > lo {
-        0.05 * (hi - lo)
-    } else if hi != 0.0 {
-        0.05 * hi.abs()
-    } else {
-        1.0
-    };
-    (lo - pad, hi + pad)
-}
 
 /// Draws `series` on `root`: a line with a marker at each point, x across.
 ///

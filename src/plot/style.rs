@@ -86,3 +86,18 @@ pub(crate) fn finite_extent<'a>(values: impl Iterator<Item = &'a f64>) -> Option
             Some((lo, hi)) => Some((f64::min(lo, v), f64::max(hi, v))),
         })
 }
+
+/// The axis range of `values`: their finite extent with 5 % of room on each side.
+pub(crate) fn bounds<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
+    let Some((lo, hi)) = finite_extent(values) else {
+        return (0.0, 1.0);
+    };
+    let pad = if hi > lo {
+        0.05 * (hi - lo)
+    } else if hi != 0.0 {
+        0.05 * hi.abs()
+    } else {
+        1.0
+    };
+    (lo - pad, hi + pad)
+}

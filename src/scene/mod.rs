@@ -27,7 +27,7 @@ mod material;
 mod mesh;
 pub mod overrides;
 mod run;
-mod validate;
+pub(crate) mod validate;
 
 pub use body::{
     Body, Formulation, Hourglass, HourglassForm, DEFAULT_HOURGLASS_COEFFICIENT, NAME_MAX,

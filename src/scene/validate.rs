@@ -11,10 +11,11 @@ use super::mesh::MeshSpec;
 use crate::error::{Error, Result};
 use crate::gmsh::NodeGroup;
 
-/// Checks the tables of the scene file `file`; its errors name that file.
-pub(super) struct Validator<'a> {
-    /// The scene file.
-    pub(super) file: &'a Path,
+/// Checks the tables of the scene file `file` (and of a study file: `study::validate` adds its
+/// tables' checks to the same type); its errors name that file.
+pub(crate) struct Validator<'a> {
+    /// The file checked.
+    pub(crate) file: &'a Path,
 }
 
 /// A number as messages show it (Rust's `{:?}`: `1.0`, `1e-7`, `NaN`).
@@ -36,7 +37,7 @@ pub(super) fn number(v: &toml::Value) -> Option<f64> {
 
 impl Validator<'_> {
     /// The error of `value` at `key`: [`Error::Invalid`] in this scene file.
-    pub(super) fn invalid(
+    pub(crate) fn invalid(
         &self,
         key: impl Into<String>,
         value: impl Into<String>,
@@ -91,7 +92,7 @@ impl Validator<'_> {
     }
 
     /// `x`, finite.
-    pub(super) fn finite(&self, key: &str, x: f64) -> Result<f64> {
+    pub(crate) fn finite(&self, key: &str, x: f64) -> Result<f64> {
         if x.is_finite() {
             Ok(x)
         } else {
@@ -106,7 +107,7 @@ impl Validator<'_> {
 
     /// The value of the keyword `word` at `key` among `words` (the first when `word` is absent:
     /// the default); another word is refused with `expected` as the reason.
-    pub(super) fn keyword<T: Copy>(
+    pub(crate) fn keyword<T: Copy>(
         &self,
         key: &str,
         word: Option<&str>,

@@ -8,10 +8,10 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use toml::Value;
 
-use super::validate::Check;
 use crate::error::{Error, Result};
 use crate::run::Backend;
 use crate::scene::overrides::KeyPath;
+use crate::scene::validate::Validator;
 use crate::scene::{toml_message, SCENE_MAX_BYTES};
 
 /// Largest study file read (bytes).
@@ -352,7 +352,7 @@ impl Study {
             file: path.to_path_buf(),
             message: toml_message(text, &e),
         })?;
-        let v = Check { file: path };
+        let v = Validator { file: path };
         let h = &raw.study;
         let name = match &h.name {
             Some(n) => v.name("study.name", n)?,

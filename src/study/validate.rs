@@ -1,9 +1,8 @@
-//! The checks of a study file's tables (`Check`): names, keywords, counts, each
+//! The checks of a study file's tables (added to the scene's `Validator`, whose errors, keywords and
+//! finite numbers they use): names, keywords, counts, each
 //! `[[parameter]]`, `[[collect]]` and `[threshold]` against the others, and the number of cases;
-//! each refusal an [`Error::Invalid`] naming the study file, the key and the value. What
+//! each refusal an [`crate::error::Error::Invalid`] naming the study file, the key and the value. What
 //! [`super::spec::Study::parse`] calls. Host-side only, no GPU twin.
-
-use std::path::Path;
 
 use toml::Value;
 
@@ -11,30 +10,11 @@ use super::spec::{
     range_values, Condition, Figure, Kind, Parameter, RawCollect, RawParameter, RawRange,
     RawThreshold, Reduce, Source, Study, Threshold, Values, MAX_CASES, NAME_MAX, SUMMARY_NUMBERS,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::scene::overrides::{shown, KeyPath};
+use crate::scene::validate::Validator;
 
-/// Checks the tables of the study file `file`; its errors name that file.
-pub(super) struct Check<'a> {
-    /// The study file.
-    pub(super) file: &'a Path,
-}
-
-impl Check<'_> {
-    pub(super) fn invalid(
-        &self,
-        key: impl Into<String>,
-        value: impl Into<String>,
-        reason: &str,
-    ) -> Error {
-        Error::Invalid {
-            file: self.file.to_path_buf(),
-            key: key.into(),
-            value: value.into(),
-            reason: reason.to_string(),
-        }
-    }
-
+impl Validator<'_> {
     /// A study, parameter or figure name: 1 to [`NAME_MAX`] ASCII letters, digits, `_`, `-`,
     /// `.` or `[`, `]` (key paths as names), not starting with `.` or `-`.
     pub(super) fn name(&self, key: &str, name: &str) -> Result<String> {
@@ -59,22 +39,6 @@ impl Check<'_> {
         }
     }
 
-    pub(super) fn keyword<T: Copy>(
-        &self,
-        key: &str,
-        word: Option<&str>,
-        words: &[(&str, T)],
-        expected: &str,
-    ) -> Result<T> {
-        let found = match word {
-            None => words.first(),
-            Some(w) => words.iter().find(|(k, _)| *k == w),
-        };
-        found
-            .map(|&(_, t)| t)
-            .ok_or_else(|| self.invalid(key, format!("{:?}", word.unwrap_or_default()), expected))
-    }
-
     /// A count in 1..=[`MAX_CASES`] at `key` (required for `kind`).
     pub(super) fn count(&self, key: &str, n: Option<i64>, kind: &str) -> Result<usize> {
         match n {
@@ -85,14 +49,6 @@ impl Check<'_> {
                 &format!("must be an integer in 1..={MAX_CASES}"),
             )),
             None => Err(self.invalid(key, "(missing)", &format!("required for kind = {kind:?}"))),
-        }
-    }
-
-    pub(super) fn finite(&self, key: &str, x: f64) -> Result<f64> {
-        if x.is_finite() {
-            Ok(x)
-        } else {
-            Err(self.invalid(key, format!("{x:?}"), "must be a finite number"))
         }
     }
 
