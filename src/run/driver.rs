@@ -229,12 +229,13 @@ pub fn run_with(
     };
     'outer: loop {
         let t0 = Instant::now();
-        let before = (solver.steps(), solver.time().to_bits());
         solver.advance(&mut events)?;
         loop_seconds += t0.elapsed().as_secs_f64();
-        // A solver that neither took a step nor said why (a restored state marked finished
-        // without its end) would be asked again forever.
-        if events.is_empty() && before == (solver.steps(), solver.time().to_bits()) {
+        // A solver that has ended without saying how (a restored state marked finished without
+        // its end) would be asked again forever. (A GPU solver's step and time are those of its
+        // last readback: an advance that returns for the progress callback before a history row
+        // leaves them as they were, so they cannot tell.)
+        if events.is_empty() && solver.finished() {
             let why = format!(
                 "the solver stopped at step {}, t = {:e} s, before the end time {:e} s without \
                  saying why",

@@ -744,6 +744,10 @@ impl Solver for CpuSolver {
         Ok(())
     }
 
+    fn finished(&self) -> bool {
+        self.s.done
+    }
+
     fn steps(&self) -> u64 {
         self.s.n
     }

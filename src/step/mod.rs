@@ -276,6 +276,9 @@ pub trait Solver {
     /// # Errors
     /// Only for backend failures (a lost device); instability is an [`Event::Failed`].
     fn advance(&mut self, events: &mut Vec<Event>) -> Result<()>;
+    /// Whether the solver has ended (its [`Event::Done`] or [`Event::Failed`] given): it takes no
+    /// more steps.
+    fn finished(&self) -> bool;
     /// Steps taken so far.
     fn steps(&self) -> u64;
     /// Current simulated time.

@@ -46,6 +46,9 @@ impl<F: FnMut(&CpuSolver)> Solver for Watched<F> {
         (self.watch)(&self.solver);
         Ok(())
     }
+    fn finished(&self) -> bool {
+        self.solver.finished()
+    }
     fn steps(&self) -> u64 {
         self.solver.steps()
     }

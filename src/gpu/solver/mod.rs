@@ -484,6 +484,10 @@ impl Solver for GpuSolver {
         Ok(())
     }
 
+    fn finished(&self) -> bool {
+        self.finished
+    }
+
     fn steps(&self) -> u64 {
         self.ctrl.step as u64
     }
