@@ -5,7 +5,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::read::History;
-use super::style::{bounds, text, tick, PALETTE};
+use super::style::{bounds, draw_axes, text, PALETTE};
 
 /// Width and height of a chart in pixels.
 pub const SIZE: (u32, u32) = (1000, 600);
@@ -106,18 +106,7 @@ pub fn draw<DB: DrawingBackend>(
                 None => 0.0..1.0,
             },
         );
-    chart
-        .configure_mesh()
-        .x_desc("time [s]")
-        .y_desc(y_desc)
-        .label_style(("sans-serif", 14))
-        .axis_desc_style(("sans-serif", 16))
-        .x_label_formatter(&|v| tick(*v, t1 - t0, 1e-2..1e4))
-        .y_label_formatter(&|v| tick(*v, y1 - y0, 1e-2..1e4))
-        .light_line_style(WHITE)
-        .bold_line_style(BLACK.mix(0.08))
-        .draw()
-        .map_err(text)?;
+    draw_axes(&mut chart, "time [s]", y_desc, (t0, t1), (y0, y1))?;
     for (i, (label, values)) in lines.iter().enumerate() {
         let color = PALETTE[i % PALETTE.len()].to_rgba();
         let series = chart

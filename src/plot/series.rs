@@ -5,7 +5,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::style::{bounds, text, tick, PALETTE};
+use super::style::{bounds, draw_axes, text, PALETTE};
 
 /// One series: its label and its points (x, y), drawn in x order.
 pub type Series = (String, Vec<(f64, f64)>);
@@ -43,18 +43,7 @@ pub fn draw<DB: DrawingBackend>(
         .y_label_area_size(90)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(text)?;
-    chart
-        .configure_mesh()
-        .x_desc(x_desc)
-        .y_desc(y_desc)
-        .label_style(("sans-serif", 14))
-        .axis_desc_style(("sans-serif", 16))
-        .x_label_formatter(&|v| tick(*v, x1 - x0, 1e-2..1e4))
-        .y_label_formatter(&|v| tick(*v, y1 - y0, 1e-2..1e4))
-        .light_line_style(WHITE)
-        .bold_line_style(BLACK.mix(0.08))
-        .draw()
-        .map_err(text)?;
+    draw_axes(&mut chart, x_desc, y_desc, (x0, x1), (y0, y1))?;
     for (i, (label, points)) in series.iter().enumerate() {
         let color = PALETTE[i % PALETTE.len()].to_rgba();
         let mut sorted: Vec<(f64, f64)> = points

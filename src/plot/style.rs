@@ -101,3 +101,34 @@ pub(crate) fn bounds<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
     };
     (lo - pad, hi + pad)
 }
+
+/// Draws the grid, ticks and axis titles of a chart over `x` and `y` (the time charts' and the
+/// study's series' common look: light grid, tick labels by [`tick`]).
+pub(crate) fn draw_axes<DB: plotters::prelude::DrawingBackend>(
+    chart: &mut plotters::prelude::ChartContext<
+        '_,
+        DB,
+        plotters::prelude::Cartesian2d<
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+        >,
+    >,
+    x_desc: &str,
+    y_desc: &str,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> std::result::Result<(), String> {
+    use plotters::style::{Color, BLACK, WHITE};
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .x_label_formatter(&|v| tick(*v, x1 - x0, 1e-2..1e4))
+        .y_label_formatter(&|v| tick(*v, y1 - y0, 1e-2..1e4))
+        .light_line_style(WHITE)
+        .bold_line_style(BLACK.mix(0.08))
+        .draw()
+        .map_err(text)
+}
