@@ -112,6 +112,13 @@ impl GpuSolver {
         fused: Option<bool>,
         contact: ContactOptions,
     ) -> Result<Self> {
+        if plan.has(Stage::Failure) {
+            return Err(Error::Gpu(
+                "material failure and erosion (a material's `failure`) run on the CPU reference \
+                 only so far: use --backend cpu"
+                    .into(),
+            ));
+        }
         let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let any = |f: &dyn Fn(&crate::model::BodyModel) -> bool| model.bodies.iter().any(f);
         use crate::scene::{ContactMethod, Formulation, HourglassForm, MaterialModel};
