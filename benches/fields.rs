@@ -34,6 +34,8 @@ fn write(c: &mut Criterion) {
             displacement,
             velocity,
             plastic: Vec::new(),
+            eroded: Vec::new(),
+            damage: Vec::new(),
         };
         for (name, format) in [
             ("ascii", FieldFormat::Ascii),

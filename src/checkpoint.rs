@@ -35,7 +35,7 @@ use crate::scene::{MeshSpec, Scene};
 pub const FILE: &str = "checkpoint.bin";
 
 /// First bytes of a checkpoint file (format name and version).
-pub const MAGIC: &[u8; 8] = b"RICOCHK2";
+pub const MAGIC: &[u8; 8] = b"RICOCHK3";
 
 /// The largest checkpoint file read (a checkpoint holds a few hundred bytes per node).
 pub const MAX_BYTES: u64 = 16 << 30;

@@ -13,6 +13,10 @@ pub enum Stage {
     /// J2 plastic return and plastic work of the elements of plastic bodies (per-element plastic
     /// state kept between steps).
     Plasticity,
+    /// Failure criteria after the element evaluation, and erosion of the elements that fail
+    /// (bodies whose material has `failure`; per-element eroded flag and damage kept between
+    /// steps).
+    Failure,
     /// Viscous hourglass forces (bodies with the viscous form).
     HourglassViscous,
     /// Stiffness hourglass forces (bodies with the stiffness form).
@@ -45,6 +49,7 @@ impl Stage {
         match self {
             Stage::ElementForces => "element_forces",
             Stage::Plasticity => "plasticity",
+            Stage::Failure => "failure",
             Stage::HourglassViscous => "hourglass_viscous",
             Stage::HourglassStiffness => "hourglass_stiffness",
             Stage::BulkViscosity => "bulk_viscosity",
@@ -101,6 +106,9 @@ impl Plan {
         let mut stages = vec![Stage::ElementForces];
         if model.has_plasticity() {
             stages.push(Stage::Plasticity);
+        }
+        if model.has_failure() {
+            stages.push(Stage::Failure);
         }
         if viscous > 0 {
             stages.push(Stage::HourglassViscous);

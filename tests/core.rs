@@ -13,6 +13,9 @@
 //! - [`wave`]: 1D waves in a rod strip against the dispersion table of `REFERENCES.md` section 2;
 //! - [`energy`]: the energy audit of a free-vibrating block (conservative and dissipative), of a
 //!   pressure load and of mass damping;
+//! - [`failure`]: material failure and erosion: a single element eroding at the step its
+//!   plastic strain reaches the limit, Johnson-Cook damage at zero triaxiality against its closed
+//!   form, the energy audit with `eroded_energy`, free nodes, the plan, the outputs;
 //! - [`friction`]: Coulomb friction with Lagrange contact: a block sliding on a floor and on a
 //!   clamped block decelerates at mu g, its friction work and force;
 //! - [`gravity`]: gravity as a body force: exact free fall and its work, a block resting on a wall;
@@ -74,6 +77,8 @@ mod checkpoint_checks;
 mod contact;
 #[path = "core/energy.rs"]
 mod energy;
+#[path = "core/failure.rs"]
+mod failure;
 #[path = "core/friction.rs"]
 mod friction;
 #[path = "core/fuzz.rs"]

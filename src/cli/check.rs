@@ -144,6 +144,12 @@ fn print_bodies(scene: &Scene, model: &Model) {
                 );
             }
         }
+        if let Some(f) = &b.params.failure {
+            println!(
+                "           failure: {}; a failed element erodes at once (its mass stays on its nodes)",
+                f.describe()
+            );
+        }
     }
 }
 

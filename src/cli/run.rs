@@ -101,25 +101,13 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             );
         }
     }
-    if s.contact_unconverged > 0 {
-        let tolerance = if s.backend == "gpu" {
-            ricochet::gpu::contact::solve::TOLERANCE
-        } else {
-            ricochet::contact::SWEEP_TOLERANCE
-        };
-        let residual = match s.contact_residual_max {
-            Some(r) => format!("with a residual up to {r:.2e} of the search margin"),
-            None => "(this backend does not measure the residual)".to_string(),
-        };
-        eprintln!(
-            "warning: the Lagrange contact did not converge in {} of {} steps: their sweeps \
-             stopped at the limit ({} a solve) {residual} (the largest gap change of a step's \
-             last sweep; tolerance {:.0e})",
-            s.contact_unconverged,
-            s.steps,
-            ricochet::contact::MAX_SWEEPS,
-            tolerance
-        );
+    if let Some(w) = ricochet::run::convergence_warning(
+        &s.backend,
+        s.steps,
+        s.contact_unconverged,
+        s.contact_residual_max,
+    ) {
+        eprintln!("warning: {w}");
     }
     let failed = match &outcome.ending {
         Ending::Interrupted(_) => {

@@ -360,6 +360,9 @@ impl ContactSet {
             last_lambda: Vec::new(),
             last_dv: Vec::new(),
             touched: Vec::new(),
+            partner: Vec::new(),
+            by_slave: Vec::new(),
+            pairs: Vec::new(),
             mark: Vec::new(),
         };
         set.penalty_step = set.compute_penalty_step();

@@ -293,6 +293,15 @@ pub struct ContactSet {
     touched: Vec<u32>,
     #[serde(skip)]
     mark: Vec<bool>,
+    /// Scratch of the sweeps: each constraint's partner in a 2 x 2 block (`u32::MAX`: none),
+    /// and the (slave node, constraint) pairs that find them.
+    #[serde(skip)]
+    partner: Vec<u32>,
+    #[serde(skip)]
+    by_slave: Vec<(u32, u32)>,
+    /// Scratch of the pairing: (coupling, constraint, constraint) candidates.
+    #[serde(skip)]
+    pairs: Vec<(f64, u32, u32)>,
 }
 
 impl ContactSet {

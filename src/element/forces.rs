@@ -281,6 +281,7 @@ mod tests {
             youngs_modulus: 210e9,
             poisson_ratio: 0.3,
             plasticity: None,
+            failure: None,
         }
     }
 
@@ -372,6 +373,7 @@ mod tests {
             youngs_modulus: 210e9,
             poisson_ratio: 0.0,
             plasticity: None,
+            failure: None,
         };
         let p = ElementParams::new(
             &m,
@@ -399,6 +401,7 @@ mod tests {
             youngs_modulus: 210e9,
             poisson_ratio: nu,
             plasticity: None,
+            failure: None,
         };
         ElementParams::new(&m, Formulation::PlaneStrain, 0.01, hg, 0.1, (0.0, 0.0))
     }

@@ -23,11 +23,12 @@
 //!
 //! By file: [`params`] (a body's constitutive and control parameters, from its material),
 //! [`stress`] (the stress of the material models), [`plastic`] (J2 plasticity at finite
-//! strain), [`hourglass`] (Flanagan-Belytschko hourglass control) and [`forces`] (one element's
+//! strain), [`failure`] (the failure criteria and Johnson-Cook damage), [`hourglass`] (Flanagan-Belytschko hourglass control) and [`forces`] (one element's
 //! evaluation: deformation, forces, bulk viscosity, stable step, energies). The element sits
 //! below the model, whose bodies hold their [`ElementParams`] and whose first step is the
 //! elements' stable step at t = 0; it reads the pure geometry of [`crate::geometry`].
 
+pub mod failure;
 pub mod forces;
 pub mod hourglass;
 pub mod params;

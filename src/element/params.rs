@@ -2,7 +2,7 @@
 //! ([`ElementParams`]), its hourglass control and bulk viscosity. Built once per body by the
 //! model; the GPU solver uploads them per body in f32 ([`crate::gpu::element::GpuBody`]).
 
-use crate::scene::{Formulation, HourglassForm, Material, MaterialModel};
+use crate::scene::{FailureCriteria, Formulation, HourglassForm, Material, MaterialModel};
 
 /// Constitutive and control parameters shared by all elements of one body.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -54,6 +54,9 @@ pub struct ElementParams {
     pub jc_c: f64,
     /// Johnson-Cook reference strain rate.
     pub jc_rate0: f64,
+    /// The material's failure criteria (`None`: its elements never fail; see
+    /// [`crate::element::failure`]).
+    pub failure: Option<FailureCriteria>,
 }
 
 impl ElementParams {
@@ -100,6 +103,7 @@ impl ElementParams {
             jc_n: jc.map_or(1.0, |j| j.n),
             jc_c: jc.map_or(0.0, |j| j.c),
             jc_rate0: jc.map_or(1.0, |j| j.reference_strain_rate),
+            failure: material.failure,
         }
     }
 

@@ -287,6 +287,7 @@ mod tests {
             youngs_modulus: 117e9,
             poisson_ratio: 0.35,
             plasticity: Some(plasticity),
+            failure: None,
         };
         ElementParams::new(
             &m,

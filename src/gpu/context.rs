@@ -1,10 +1,12 @@
 //! The headless GPU context: instance from the environment, the adapter [`super::choice`] picks
 //! (by index, PCI bus id or name, within `CUDA_VISIBLE_DEVICES` / `ROCR_VISIBLE_DEVICES`),
-//! device and queue.
+//! device and queue, and the kernels compiled on it ([`KernelCache`]: one compilation per
+//! combination of features for the context's life).
 
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use super::choice::{arrange, choose, Candidate, Selector, Visible};
+use super::kernels::{Features, Kernels};
 use crate::error::{Error, Result};
 
 /// A device and queue on a chosen adapter.
@@ -18,6 +20,80 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Whether timestamp queries are available (used only when present).
     pub timestamps: bool,
+    /// The kernels compiled on `device` so far.
+    pub kernels: KernelCache,
+}
+
+/// The kernels compiled on one device, by what they were compiled for: a second solver with the
+/// same features (the cases of a verification ladder, a bench's sizes, a study or the tests in
+/// one process) reuses the pipelines instead of compiling them again. Compiling the contact
+/// kernels costs lavapipe about 2.5 s of CPU with Mesa's shader cache warm and about 28 s cold
+/// (measured 2026-11-27 on a 2-core AMD EPYC, Mesa 22.3.6): half of the GPU tests' CPU time was
+/// spent there. Pipelines are immutable and hold no simulation state, so sharing them changes
+/// no result. At most [`KernelCache::CAPACITY`] entries; the oldest leaves first.
+#[derive(Debug, Default)]
+pub struct KernelCache {
+    entries: Mutex<Vec<(KernelKey, Arc<Kernels>)>>,
+}
+
+/// What a set of kernels was compiled for: the features and the optional stages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct KernelKey {
+    /// Features compiled in.
+    pub features: Features,
+    /// Velocity boundaries.
+    pub boundaries: bool,
+    /// Contact or rigid walls.
+    pub contact: bool,
+    /// Pressure loads.
+    pub pressure: bool,
+}
+
+impl KernelCache {
+    /// Most sets of kernels kept.
+    pub const CAPACITY: usize = 32;
+
+    /// The kernels for `key`, compiled by `compile` unless a set was kept; `compile` returns
+    /// `None` when the device rejected them, and nothing is kept then.
+    pub fn get_or_compile(
+        &self,
+        key: KernelKey,
+        compile: impl FnOnce() -> Option<Kernels>,
+    ) -> Option<Arc<Kernels>> {
+        if let Some(k) = self.find(&key) {
+            return Some(k);
+        }
+        // Compiled outside the lock: two threads asking for the same new key may both compile
+        // it (the same pipelines); the first kept is used from then on.
+        let compiled = Arc::new(compile()?);
+        let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, k)) = entries.iter().find(|(k, _)| *k == key) {
+            return Some(k.clone());
+        }
+        if entries.len() >= Self::CAPACITY {
+            entries.remove(0);
+        }
+        entries.push((key, compiled.clone()));
+        Some(compiled)
+    }
+
+    fn find(&self, key: &KernelKey) -> Option<Arc<Kernels>> {
+        let entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
+        entries
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, k)| k.clone())
+    }
+
+    /// Sets of kernels kept.
+    pub fn len(&self) -> usize {
+        self.entries.lock().unwrap_or_else(|e| e.into_inner()).len()
+    }
+
+    /// Whether none is kept.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 fn instance() -> wgpu::Instance {
@@ -125,6 +201,7 @@ impl GpuContext {
             queue,
             info,
             timestamps,
+            kernels: KernelCache::default(),
         })
     }
 

@@ -31,5 +31,5 @@ pub mod shader;
 pub mod solver;
 pub mod state;
 
-pub use context::GpuContext;
+pub use context::{GpuContext, KernelCache, KernelKey};
 pub use solver::GpuSolver;

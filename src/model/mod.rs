@@ -645,4 +645,16 @@ impl Model {
             .iter()
             .any(|b| b.params.model == crate::scene::MaterialModel::J2Plastic)
     }
+
+    /// Whether a body's material has failure criteria (its elements may erode).
+    pub fn has_failure(&self) -> bool {
+        self.bodies.iter().any(|b| b.params.failure.is_some())
+    }
+
+    /// Whether a body's material has Johnson-Cook damage (kept per element between steps).
+    pub fn has_damage(&self) -> bool {
+        self.bodies
+            .iter()
+            .any(|b| b.params.failure.is_some_and(|f| f.johnson_cook.is_some()))
+    }
 }

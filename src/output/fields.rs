@@ -452,7 +452,20 @@ fn arrays(model: &Model, snap: &Snapshot, body: &crate::model::BodyModel) -> [Ve
             values: vec3(&|i| snap.velocity[i]),
         },
     ];
-    let fields = all_element_fields(model, &snap.displacement, &snap.plastic, elems.clone());
+    let mut fields = all_element_fields(model, &snap.displacement, &snap.plastic, elems.clone());
+    // An eroded element carries no stress: its stress fields are 0 (its plastic strain is the
+    // one it failed at).
+    let eroded = |e: usize| snap.eroded.get(e) == Some(&true);
+    for (f, e) in fields.iter_mut().zip(elems.clone()) {
+        if eroded(e) {
+            *f = ElementFields {
+                stress: [0.0; 4],
+                von_mises: 0.0,
+                pressure: 0.0,
+                ..*f
+            };
+        }
+    }
     let mut cell_data = vec![
         Array {
             name: "stress",
@@ -485,6 +498,27 @@ fn arrays(model: &Model, snap: &Snapshot, body: &crate::model::BodyModel) -> [Ve
             components: 1,
             extra: "",
             values: Values::F64(fields.iter().map(|f| f.pressure).collect()),
+        });
+    }
+    if body.params.failure.is_some() && !snap.eroded.is_empty() {
+        cell_data.push(Array {
+            name: "eroded",
+            components: 1,
+            extra: "",
+            values: Values::U8(elems.clone().map(|e| u8::from(eroded(e))).collect()),
+        });
+    }
+    if body
+        .params
+        .failure
+        .is_some_and(|f| f.johnson_cook.is_some())
+        && !snap.damage.is_empty()
+    {
+        cell_data.push(Array {
+            name: "damage",
+            components: 1,
+            extra: "",
+            values: Values::F64(elems.clone().map(|e| snap.damage[e]).collect()),
         });
     }
     [points, cells, point_data, cell_data]

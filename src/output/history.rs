@@ -39,9 +39,16 @@ pub struct EnergyAudit {
 
 impl EnergyAudit {
     /// Total energy of a sample: kinetic + internal + hourglass + viscous work + plastic work +
-    /// contact energy + friction work - external work.
+    /// eroded energy + contact energy + friction work - external work.
     pub fn total(s: &Sample) -> f64 {
-        s.kinetic + s.internal + s.hourglass + s.viscous + s.plastic + s.contact + s.friction
+        s.kinetic
+            + s.internal
+            + s.hourglass
+            + s.viscous
+            + s.plastic
+            + s.eroded_energy
+            + s.contact
+            + s.friction
             - s.external
     }
 
@@ -62,6 +69,7 @@ impl EnergyAudit {
             + s.hourglass
             + s.viscous
             + s.plastic
+            + s.eroded_energy
             + s.contact.abs()
             + s.friction.abs();
         self.largest = self
@@ -93,12 +101,15 @@ pub struct HistoryWriter {
     plastic: bool,
     /// Whether the rows have the `friction_work` column and the contacts' `.ft` columns.
     friction: bool,
+    /// Whether the rows have the `eroded_elements` and `eroded_energy` columns.
+    erosion: bool,
 }
 
 impl HistoryWriter {
     /// Creates the file and writes the header; `bodies` name the per-body columns and `contacts`
     /// the per-contact (and rigid wall) columns; `plastic` adds the `plastic_work` column after
-    /// `viscous_work` (scenes with a J2 plastic material); `per_radian` writes the comment line
+    /// `viscous_work` (scenes with a J2 plastic material); `erosion` adds `eroded_elements` and
+    /// `eroded_energy` after them (scenes with failure); `per_radian` writes the comment line
     /// [`PER_RADIAN`] before the header (scenes with an axisymmetric body).
     ///
     /// # Errors
@@ -109,6 +120,7 @@ impl HistoryWriter {
         contacts: &[String],
         plastic: bool,
         friction: bool,
+        erosion: bool,
         per_radian: bool,
     ) -> Result<Self> {
         let file = File::create(path).map_err(|source| Error::Write {
@@ -123,6 +135,7 @@ impl HistoryWriter {
             rows: 0,
             plastic,
             friction,
+            erosion,
         };
         if per_radian {
             w.line(PER_RADIAN)?;
@@ -130,6 +143,12 @@ impl HistoryWriter {
         let mut header = COLUMNS.join(",");
         if plastic {
             header = header.replace(",viscous_work,", ",viscous_work,plastic_work,");
+        }
+        if erosion {
+            header = header.replace(
+                ",contact_energy,",
+                ",eroded_elements,eroded_energy,contact_energy,",
+            );
         }
         if friction {
             header = header.replace(",contact_energy,", ",contact_energy,friction_work,");
@@ -165,6 +184,7 @@ impl HistoryWriter {
         digest: u64,
         plastic: bool,
         friction: bool,
+        erosion: bool,
     ) -> Result<Self> {
         use std::io::{Read, Seek, SeekFrom};
         let write_err = |source| Error::Write {
@@ -244,6 +264,7 @@ impl HistoryWriter {
             rows,
             plastic,
             friction,
+            erosion,
         })
     }
 
@@ -289,8 +310,13 @@ impl HistoryWriter {
         } else {
             String::new()
         };
+        let eroded = if self.erosion {
+            format!(",{},{:e}", s.eroded_elements, s.eroded_energy)
+        } else {
+            String::new()
+        };
         let mut line = format!(
-            "{:e},{},{:e},{:e},{:e},{:e},{:e}{plastic},{:e}{friction},{:e},{:e}",
+            "{:e},{},{:e},{:e},{:e},{:e},{:e}{plastic}{eroded},{:e}{friction},{:e},{:e}",
             s.time,
             s.step,
             s.dt,

@@ -65,6 +65,14 @@ pub struct Summary {
     /// stays in `contact_energy` after release. 0: every spring acted unchanged.
     #[serde(default)]
     pub contact_penalty_bounded: u64,
+    /// Failure criteria: one line per material that has them ("steel: plastic_strain 0.8");
+    /// no key in `summary.json` for a scene without failure.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub failure: Vec<String>,
+    /// Elements eroded by the end of the run (failed, or about to invert with
+    /// `run.erosion.inverted`); no key without failure.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub eroded_elements: Option<u64>,
     /// Seconds per stage where the backend measures them.
     pub stage_seconds: Vec<(String, f64)>,
     /// History rows written.

@@ -70,8 +70,20 @@ impl Field {
         }
     }
 
-    /// The value of every cell of `piece` (empty when the piece lacks the field).
+    /// The value of every cell of `piece` (empty when the piece lacks the field; NaN on an
+    /// eroded cell, which the colour range leaves out: see [`eroded_cells`]).
     pub fn values(self, piece: &Piece) -> Vec<f64> {
+        let mut v = self.values_of_all(piece);
+        for (x, gone) in v.iter_mut().zip(eroded_cells(piece)) {
+            if gone {
+                *x = f64::NAN;
+            }
+        }
+        v
+    }
+
+    /// [`Field::values`] of every cell, eroded or not.
+    fn values_of_all(self, piece: &Piece) -> Vec<f64> {
         let nodal_mean = |name: &str| -> Vec<f64> {
             let Some(a) = piece.point_array(name) else {
                 return Vec::new();
@@ -113,6 +125,20 @@ impl Field {
             Field::Velocity => nodal_mean("velocity"),
             Field::Displacement => nodal_mean("displacement"),
         }
+    }
+}
+
+/// Per cell of `piece`, whether it eroded (its cell data `eroded` is not 0): pictures leave it
+/// out, so that a perforation looks like one. All false without that array.
+pub fn eroded_cells(piece: &Piece) -> Vec<bool> {
+    match piece.cell_array("eroded") {
+        Some(a) => a
+            .values
+            .iter()
+            .step_by(a.components.max(1))
+            .map(|&x| x != 0.0)
+            .collect(),
+        None => vec![false; piece.cells()],
     }
 }
 
@@ -299,7 +325,11 @@ pub fn draw<DB: DrawingBackend>(
     let area = chart.plotting_area();
     for layer in &frame.layers {
         let piece = layer.piece;
+        let gone = eroded_cells(piece);
         for c in 0..piece.cells() {
+            if gone[c] {
+                continue;
+            }
             let [r, g, b] = level_colour(level(layer.values[c], lo, hi));
             area.draw(&Polygon::new(corners(piece, c), RGBColor(r, g, b).filled()))
                 .map_err(text)?;
@@ -309,7 +339,11 @@ pub fn draw<DB: DrawingBackend>(
         let edge = RGBColor(40, 40, 40);
         for layer in &frame.layers {
             let piece = layer.piece;
+            let gone = eroded_cells(piece);
             for c in 0..piece.cells() {
+                if gone[c] {
+                    continue;
+                }
                 let mut pts = corners(piece, c);
                 if let Some(&first) = pts.first() {
                     pts.push(first);

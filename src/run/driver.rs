@@ -104,6 +104,7 @@ pub fn run_with(
                 &contacts,
                 model.has_plasticity(),
                 model.has_friction(),
+                model.has_failure(),
                 !model.radius.is_empty(),
             )?,
             match scene.run.field_interval {
@@ -153,6 +154,7 @@ pub fn run_with(
                     c.history_digest,
                     model.has_plasticity(),
                     model.has_friction(),
+                    model.has_failure(),
                 )?,
                 match scene.run.field_interval {
                     Some(_) => Some(FieldWriter::resume(
@@ -399,6 +401,14 @@ fn summary_now(
         contact_unconverged: counters.contact_unconverged,
         contact_residual_max: (solver.backend() == "cpu").then_some(counters.contact_residual_max),
         contact_penalty_bounded: counters.contact_penalty_bounded,
+        failure: scene
+            .materials
+            .iter()
+            .filter_map(|m| Some(format!("{}: {}", m.name, m.failure?.describe())))
+            .collect(),
+        eroded_elements: plan
+            .has(crate::plan::Stage::Failure)
+            .then_some(counters.eroded_elements),
         stage_seconds: solver.stage_seconds(),
         history_rows,
         snapshots,

@@ -15,6 +15,7 @@ mod driver;
 mod interrupt;
 mod launch;
 mod limits;
+mod warnings;
 
 pub use driver::{run, run_with, Progress, RunOptions, RunResult};
 pub use interrupt::Interrupt;
@@ -27,6 +28,7 @@ pub use limits::{
     memory_estimate, BYTES_PER_ELEMENT, FIELD_BYTES_PER_ELEMENT, GPU_BYTES_PER_ELEMENT,
     GPU_SAMPLE_BYTES, MAX_HISTORY_ROWS, MAX_SNAPSHOTS, MAX_STEPS, PLASTIC_BYTES_PER_ELEMENT,
 };
+pub use warnings::convergence_warning;
 
 use crate::error::Result;
 use crate::model::Model;

@@ -1,7 +1,8 @@
 //! `[[material]]`: materials (README, "Scene format", `[[material]]`): the raw table,
-//! [`Material`], [`MaterialModel`], the yield parameters [`Plasticity`] and [`JohnsonCook`], and
-//! their validation. The models themselves are in [`crate::step`] (CPU reference) and
-//! `shaders/element.wgsl` (GPU). Host-side only.
+//! [`Material`], [`MaterialModel`], the yield parameters [`Plasticity`] and [`JohnsonCook`], the
+//! failure criteria [`FailureCriteria`] and [`JohnsonCookDamage`], and their validation. The
+//! models themselves are in [`crate::element`] (CPU reference; failure in
+//! [`crate::element::failure`]) and `shaders/element.wgsl` (GPU). Host-side only.
 
 use serde::Deserialize;
 
@@ -21,6 +22,7 @@ pub(super) struct RawMaterial {
     yield_stress: Option<f64>,
     hardening_modulus: Option<f64>,
     johnson_cook: Option<toml::Value>,
+    failure: Option<toml::Value>,
 }
 
 /// Constitutive model of a material.
@@ -64,6 +66,68 @@ pub struct JohnsonCook {
     pub reference_strain_rate: f64,
 }
 
+/// Johnson-Cook damage (Johnson and Cook 1985): the element fails when
+/// D = sum d(eps_p) / eps_f reaches 1, with the failure strain
+/// eps_f = [d1 + d2 exp(d3 sigma*)] [1 + d4 ln(max(rate / reference_strain_rate, 1))]
+/// [1 + d5 T*], sigma* = sigma_m / sigma_vm the triaxiality (tension positive), rate the
+/// equivalent plastic strain rate (its reference the flow stress's `reference_strain_rate`, 1/s
+/// without a Johnson-Cook flow stress), T* the homologous temperature (0: no heating modelled).
+/// eps_f is bounded below by [`crate::element::failure::MIN_FAILURE_STRAIN`]; no damage
+/// accumulates below sigma* = -1/3 (Bao and Wierzbicki's cut-off).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JohnsonCookDamage {
+    /// D1 (any finite number).
+    pub d1: f64,
+    /// D2 (any finite number).
+    pub d2: f64,
+    /// D3 (any finite number; < 0 makes eps_f fall with the triaxiality).
+    pub d3: f64,
+    /// D4, the strain-rate term.
+    pub d4: f64,
+    /// D5, the temperature term.
+    pub d5: f64,
+    /// Reference strain rate of the rate term (1/s): the flow stress's, 1 without one.
+    pub reference_strain_rate: f64,
+}
+
+/// The failure criteria of a material (`failure = { ... }`): an element erodes at the first
+/// that it meets.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FailureCriteria {
+    /// `plastic_strain`: the equivalent plastic strain at failure (> 0; `j2_plastic` only).
+    pub plastic_strain: Option<f64>,
+    /// `johnson_cook = { d1, d2, d3, d4, d5 }`: Johnson-Cook damage (`j2_plastic` only).
+    pub johnson_cook: Option<JohnsonCookDamage>,
+    /// `principal_strain`: the largest principal logarithmic (true) strain at failure (> 0).
+    pub principal_strain: Option<f64>,
+    /// `tensile_pressure`: the spall limit, the tension -p = sigma_m at failure (Pa, > 0).
+    pub tensile_pressure: Option<f64>,
+}
+
+impl FailureCriteria {
+    /// The criteria as `check` and `summary.json` state them: "plastic_strain 0.8, johnson_cook
+    /// (d1 0.54, ...)".
+    pub fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if let Some(x) = self.plastic_strain {
+            parts.push(format!("plastic_strain {x}"));
+        }
+        if let Some(d) = &self.johnson_cook {
+            parts.push(format!(
+                "johnson_cook (d1 {}, d2 {}, d3 {}, d4 {}, d5 {}, reference strain rate {:e} 1/s)",
+                d.d1, d.d2, d.d3, d.d4, d.d5, d.reference_strain_rate
+            ));
+        }
+        if let Some(x) = self.principal_strain {
+            parts.push(format!("principal_strain {x}"));
+        }
+        if let Some(x) = self.tensile_pressure {
+            parts.push(format!("tensile_pressure {x:e} Pa"));
+        }
+        parts.join(", ")
+    }
+}
+
 /// A material, validated.
 #[derive(Debug, Clone)]
 pub struct Material {
@@ -79,6 +143,8 @@ pub struct Material {
     pub poisson_ratio: f64,
     /// Yield parameters (`Some` exactly for [`MaterialModel::J2Plastic`]).
     pub plasticity: Option<Plasticity>,
+    /// Failure criteria (`None`: the material never fails).
+    pub failure: Option<FailureCriteria>,
 }
 
 impl Validator<'_> {
@@ -122,6 +188,10 @@ impl Validator<'_> {
                 "must lie in (-1, 0.5)",
             ));
         }
+        let failure = match &m.failure {
+            Some(v) => Some(self.failure(&format!("{key}.failure"), v, &m.model, plasticity)?),
+            None => None,
+        };
         Ok(Material {
             name: m.name.clone(),
             model,
@@ -129,6 +199,7 @@ impl Validator<'_> {
             youngs_modulus,
             poisson_ratio: nu,
             plasticity,
+            failure,
         })
     }
 
@@ -245,5 +316,138 @@ impl Validator<'_> {
             c,
             reference_strain_rate,
         })
+    }
+
+    /// The `failure = { plastic_strain, johnson_cook, principal_strain, tensile_pressure }`
+    /// table at `key` of a material of model `model` (named as written) with the yield
+    /// parameters `plasticity`.
+    fn failure(
+        &self,
+        key: &str,
+        v: &toml::Value,
+        model: &str,
+        plasticity: Option<Plasticity>,
+    ) -> Result<FailureCriteria> {
+        const KEYS: [&str; 4] = [
+            "plastic_strain",
+            "johnson_cook",
+            "principal_strain",
+            "tensile_pressure",
+        ];
+        let expected = "expected a table with one or more of plastic_strain, johnson_cook, \
+                        principal_strain, tensile_pressure";
+        let Some(t) = v.as_table() else {
+            return Err(self.invalid(key, v.to_string(), expected));
+        };
+        if let Some(k) = t.keys().find(|k| !KEYS.contains(&k.as_str())) {
+            return Err(self.invalid(
+                format!("{key}.{k}"),
+                t[k].to_string(),
+                "unknown key (expected plastic_strain, johnson_cook, principal_strain, \
+                 tensile_pressure)",
+            ));
+        }
+        if t.is_empty() {
+            return Err(self.invalid(key, "{}", expected));
+        }
+        let num = |k: &str, v: &toml::Value| -> Result<f64> {
+            number(v).ok_or_else(|| {
+                self.invalid(format!("{key}.{k}"), v.to_string(), "expected a number")
+            })
+        };
+        let plastic_only = |k: &str| -> Result<()> {
+            if plasticity.is_none() {
+                return Err(self.invalid(
+                    format!("{key}.{k}"),
+                    "given",
+                    &format!("only a \"j2_plastic\" material has a plastic strain (this one is {model:?})"),
+                ));
+            }
+            Ok(())
+        };
+        let mut c = FailureCriteria::default();
+        if let Some(v) = t.get("plastic_strain") {
+            plastic_only("plastic_strain")?;
+            let k = format!("{key}.plastic_strain");
+            c.plastic_strain = Some(self.positive(&k, num("plastic_strain", v)?)?);
+        }
+        if let Some(v) = t.get("principal_strain") {
+            let k = format!("{key}.principal_strain");
+            c.principal_strain = Some(self.positive(&k, num("principal_strain", v)?)?);
+        }
+        if let Some(v) = t.get("tensile_pressure") {
+            let k = format!("{key}.tensile_pressure");
+            c.tensile_pressure = Some(self.positive(&k, num("tensile_pressure", v)?)?);
+        }
+        if let Some(v) = t.get("johnson_cook") {
+            plastic_only("johnson_cook")?;
+            let rate0 = plasticity
+                .and_then(|p| p.johnson_cook)
+                .map_or(1.0, |j| j.reference_strain_rate);
+            c.johnson_cook =
+                Some(self.johnson_cook_damage(&format!("{key}.johnson_cook"), v, rate0)?);
+        }
+        Ok(c)
+    }
+
+    /// The `johnson_cook = { d1, d2, d3, d4, d5 }` damage table at `key`, its rate term
+    /// referred to `rate0`.
+    fn johnson_cook_damage(
+        &self,
+        key: &str,
+        v: &toml::Value,
+        rate0: f64,
+    ) -> Result<JohnsonCookDamage> {
+        const KEYS: [&str; 5] = ["d1", "d2", "d3", "d4", "d5"];
+        let Some(t) = v.as_table() else {
+            return Err(self.invalid(
+                key,
+                v.to_string(),
+                "expected a table { d1, d2, d3, d4, d5 }",
+            ));
+        };
+        if let Some(k) = t.keys().find(|k| !KEYS.contains(&k.as_str())) {
+            return Err(self.invalid(
+                format!("{key}.{k}"),
+                t[k].to_string(),
+                "unknown key (expected d1, d2, d3, d4, d5)",
+            ));
+        }
+        let get = |k: &str| -> Result<f64> {
+            let x = match t.get(k) {
+                None => {
+                    return Err(self.invalid(
+                        format!("{key}.{k}"),
+                        "missing",
+                        "Johnson-Cook damage needs d1, d2, d3, d4 and d5",
+                    ))
+                }
+                Some(v) => number(v).ok_or_else(|| {
+                    self.invalid(format!("{key}.{k}"), v.to_string(), "expected a number")
+                })?,
+            };
+            self.finite(&format!("{key}.{k}"), x)
+        };
+        let d = JohnsonCookDamage {
+            d1: get("d1")?,
+            d2: get("d2")?,
+            d3: get("d3")?,
+            d4: get("d4")?,
+            d5: get("d5")?,
+            reference_strain_rate: rate0,
+        };
+        // The failure strain at the reference state must be a strain that a test measures:
+        // positive where the triaxiality is 0 (the floor would otherwise erode at once).
+        if d.d1 + d.d2 <= 0.0 {
+            return Err(self.invalid(
+                format!("{key}.d1"),
+                fmt_num(d.d1),
+                &format!(
+                    "d1 + d2 = {} is the failure strain at zero triaxiality and must be > 0",
+                    fmt_num(d.d1 + d.d2)
+                ),
+            ));
+        }
+        Ok(d)
     }
 }

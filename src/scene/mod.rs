@@ -37,7 +37,9 @@ pub use contact::{
     Contact, ContactMethod, PenaltyForm, RigidWall, CONTACT_NAME_MAX, DEFAULT_AUGMENTATION,
     DEFAULT_MASS_PENALTY_SCALE, DEFAULT_PENALTY_FORM, DEFAULT_PENALTY_SCALE,
 };
-pub use material::{JohnsonCook, Material, MaterialModel, Plasticity};
+pub use material::{
+    FailureCriteria, JohnsonCook, JohnsonCookDamage, Material, MaterialModel, Plasticity,
+};
 pub use mesh::{DiskRefinement, MeshSpec};
 pub use run::{
     FieldFormat, RunSettings, BULK_QUADRATIC_MAX, DEFAULT_BULK_LINEAR, DEFAULT_BULK_QUADRATIC,

@@ -2,7 +2,7 @@
 
 use crate::contact::ContactSet;
 use crate::element::plastic::PlasticState;
-use crate::element::{evaluate_state, Dissipation, ElementOut};
+use crate::element::{evaluate_state, failure, Dissipation, ElementOut};
 use crate::error::Result;
 use crate::geometry::QuadGeometry;
 use crate::model::Model;
@@ -73,6 +73,17 @@ struct CpuState {
     gravity_work: f64,
     #[serde(default)]
     gravity_after: f64,
+    /// Per element: whether it failed and eroded (empty without failure).
+    #[serde(default)]
+    eroded: Vec<bool>,
+    /// Johnson-Cook damage of every element (empty without Johnson-Cook damage).
+    #[serde(default)]
+    damage: Vec<f64>,
+    /// Elements eroded so far, and the strain and stored hourglass energy they held then.
+    #[serde(default)]
+    eroded_count: u64,
+    #[serde(default)]
+    eroded_energy: f64,
     t: f64,
     n: u64,
     dt_prev: f64,
@@ -144,6 +155,18 @@ impl CpuSolver {
             damping_after: 0.0,
             gravity_work: 0.0,
             gravity_after: 0.0,
+            eroded: if plan.has(Stage::Failure) {
+                vec![false; ne]
+            } else {
+                Vec::new()
+            },
+            damage: if plan.has(Stage::Failure) && model.has_damage() {
+                vec![0.0; ne]
+            } else {
+                Vec::new()
+            },
+            eroded_count: 0,
+            eroded_energy: 0.0,
             t: 0.0,
             n: 0,
             dt_prev: 0.0,
@@ -190,6 +213,9 @@ impl CpuSolver {
             && s.pressure_impulse.len() == self.pressure.len()
             && s.pressure_v_old.len() == self.pressure.len()
             && s.damping_v_old.len() == self.s.damping_v_old.len()
+            && s.eroded.len() == self.s.eroded.len()
+            && s.damage.len() == self.s.damage.len()
+            && s.eroded_count as usize <= s.eroded.len()
             && s.contact.is_some() == self.s.contact.is_some()
             && (self.s.dissipation.is_empty() || self.s.dissipation.len() == ne);
         if !fits {
@@ -214,6 +240,22 @@ impl CpuSolver {
     /// Current half-step velocities.
     pub fn velocity(&self) -> &[[f64; 2]] {
         &self.s.v
+    }
+
+    /// Per element, whether it failed and eroded (empty for a model without failure): the
+    /// surface that contact sees changes where one did.
+    pub fn eroded(&self) -> &[bool] {
+        &self.s.eroded
+    }
+
+    /// Elements eroded so far (a count that grows when elements erode during a batch).
+    pub fn eroded_count(&self) -> u64 {
+        self.s.eroded_count
+    }
+
+    /// Johnson-Cook damage of every element (empty without Johnson-Cook damage).
+    pub fn damage(&self) -> &[f64] {
+        &self.s.damage
     }
 
     /// The contact state, if the model has contact.
@@ -243,6 +285,9 @@ impl CpuSolver {
     pub fn stable_step(&self) -> (f64, usize) {
         let mut best = (f64::INFINITY, 0);
         for e in 0..self.model.element_count() {
+            if self.s.eroded.get(e) == Some(&true) {
+                continue;
+            }
             let out = self.evaluate(e, &Dissipation::default(), 0.0);
             if out.dt < best.0 {
                 best = (out.dt, e);
@@ -306,6 +351,30 @@ impl CpuSolver {
         }));
     }
 
+    /// Whether element `e`, evaluated as `out`, fails (its Johnson-Cook damage updated).
+    fn fails(&mut self, e: usize, out: &ElementOut) -> bool {
+        let Some(c) = self.model.params(e).failure else {
+            return false;
+        };
+        let alpha_old = self.s.plastic.get(e).map_or(0.0, |p| p.alpha);
+        let damage = self.s.damage.get(e).copied().unwrap_or(0.0);
+        let check = failure::check(
+            &c,
+            &out.stress,
+            &out.def_grad,
+            out.hoop_stretch,
+            alpha_old,
+            out.plastic.alpha,
+            self.s.dt_prev,
+            damage,
+            0.0,
+        );
+        if let Some(d) = self.s.damage.get_mut(e) {
+            *d = check.damage;
+        }
+        check.failed
+    }
+
     fn element_stage(&mut self, need_energy: bool) -> std::result::Result<ElementStage, String> {
         for f in &mut self.s.f {
             *f = [0.0; 2];
@@ -318,7 +387,11 @@ impl CpuSolver {
         };
         let keep = !self.s.dissipation.is_empty();
         let plastic = !self.s.plastic.is_empty();
+        let failure = !self.s.eroded.is_empty();
         for e in 0..self.model.element_count() {
+            if failure && self.s.eroded[e] {
+                continue;
+            }
             let q = self.model.quads[e];
             let prev = if keep {
                 self.s.dissipation[e]
@@ -326,6 +399,32 @@ impl CpuSolver {
                 Dissipation::default()
             };
             let out = self.evaluate(e, &prev, self.s.dt_prev);
+            if failure && self.fails(e, &out) {
+                // Eroded at once: no force, no stable step from now on. Its strain and stored
+                // hourglass energy leave with it, less the work its forces f_n would have done
+                // over the half step before t_n: the energy of the interval pairs f_{n-1} and
+                // f_n (trapezoidal), and f_n is never applied, so that the balance closes as on
+                // any other step. Its viscous and plastic work of the step are done.
+                let v = self.gather(e).1;
+                let half_work: f64 = (0..4)
+                    .map(|a| out.force[a][0] * v[a][0] + out.force[a][1] * v[a][1])
+                    .sum::<f64>()
+                    * 0.5
+                    * self.s.dt_prev;
+                if keep {
+                    self.s.hourglass_work += out.hourglass_work;
+                    self.s.bulk_work += out.bulk_work;
+                    self.s.dissipation[e] = Dissipation::default();
+                }
+                if plastic {
+                    self.s.plastic[e] = out.plastic;
+                    self.s.plastic_work += out.plastic_work;
+                }
+                self.s.eroded[e] = true;
+                self.s.eroded_count += 1;
+                self.s.eroded_energy += out.strain_energy + out.hourglass_stored + half_work;
+                continue;
+            }
             if out.min_corner.is_nan() || out.min_corner <= 0.0 {
                 return Err(format!(
                     "{} inverted: smallest corner Jacobian ratio {:.3e}; reduce time_step_scale, \
@@ -376,10 +475,14 @@ impl CpuSolver {
         let at_end = Clock::at_end(&s, self.s.t, self.s.dt_prev);
 
         // 1. Element stage.
-        let st = match self.element_stage(sample_due) {
+        let mut st = match self.element_stage(sample_due) {
             Ok(st) => st,
             Err(msg) => return self.fail(events, msg),
         };
+        if st.dt_min == f64::INFINITY && self.s.eroded_count > 0 && self.s.n > 0 {
+            // Every element eroded: free masses, which keep the last step.
+            st.dt_min = self.s.dt_prev / s.time_step_scale;
+        }
         if !(st.dt_min.is_finite() && st.dt_min > 0.0) {
             let msg = format!(
                 "stable step is {:e} at {}: the element is degenerate or its state is not finite",
@@ -636,6 +739,8 @@ impl CpuSolver {
                     .map(|(a, b)| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])])
                     .collect(),
                 plastic: self.s.plastic.clone(),
+                eroded: self.s.eroded.clone(),
+                damage: self.s.damage.clone(),
             }));
             self.s.clock.took_snapshot(&s, self.s.t, self.s.dt_prev);
         }
@@ -668,6 +773,8 @@ impl CpuSolver {
                 hourglass: st.hourglass_stored + self.s.hourglass_work,
                 viscous: self.s.bulk_work - (self.s.damping_work - self.s.damping_after),
                 plastic: self.s.plastic_work,
+                eroded_elements: self.s.eroded_count,
+                eroded_energy: self.s.eroded_energy,
                 external: self.s.external_work - reaction_after
                     + (self.s.pressure_work - self.s.pressure_after)
                     + (self.s.gravity_work - self.s.gravity_after),
@@ -724,6 +831,7 @@ impl Solver for CpuSolver {
             contact_unconverged: s.unconverged,
             contact_residual_max: s.residual_max,
             contact_penalty_bounded: self.s.contact.as_ref().map_or(0, |c| c.penalty_bounded()),
+            eroded_elements: self.s.eroded_count,
             ..Default::default()
         }
     }

@@ -173,6 +173,11 @@ pub struct Sample {
     pub viscous: f64,
     /// Work dissipated by plastic flow (0 without a J2 plastic material).
     pub plastic: f64,
+    /// Elements eroded so far (0 without failure).
+    pub eroded_elements: u64,
+    /// Strain and stored hourglass energy the eroded elements held when they eroded (0 without
+    /// failure); their kinetic energy stays with their nodes.
+    pub eroded_energy: f64,
     /// Work done on the model by prescribed velocities.
     pub external: f64,
     /// Contact energy: penalty energy stored plus the work the contact corrections removed
@@ -199,6 +204,10 @@ pub struct Snapshot {
     pub velocity: Vec<[f64; 2]>,
     /// Plastic state of every element at t_n (empty for a model without a J2 plastic material).
     pub plastic: Vec<PlasticState>,
+    /// Per element, whether it eroded (empty for a model without failure).
+    pub eroded: Vec<bool>,
+    /// Johnson-Cook damage of every element (empty without Johnson-Cook damage).
+    pub damage: Vec<f64>,
 }
 
 /// Why a run stopped early.
@@ -251,6 +260,9 @@ pub struct Counters {
     /// Penalty contact: impulses bounded by the perfectly plastic impulse (constraint-steps with
     /// a spring too stiff for the step; the energy they keep is lost).
     pub contact_penalty_bounded: u64,
+    /// Elements eroded so far (0 without failure): it grows in a batch where elements erode.
+    #[serde(default)]
+    pub eroded_elements: u64,
 }
 
 /// A time integrator of a model: the CPU reference or the GPU backend.

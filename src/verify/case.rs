@@ -170,6 +170,10 @@ pub enum MetricKind {
     /// The least-squares slope of the velocity of `body` along `component` over the history
     /// rows (m/s^2): a constant acceleration.
     Acceleration,
+    /// When the first element eroded (s): the time of the first history row whose
+    /// `eroded_elements` is not 0 (with a row every step, the t_n of the step whose state met
+    /// the failure criterion).
+    ErosionTime,
 }
 
 /// A bound value: a number, or an expression over the run's variables (e.g. `"0.9 / n"`).
@@ -412,7 +416,8 @@ impl Case {
                 | K::EnergyDrift
                 | K::EnergyBalance
                 | K::KineticRatio
-                | K::FrictionWork => {}
+                | K::FrictionWork
+                | K::ErosionTime => {}
             }
             if let Some(c) = &m.component {
                 if c != "x" && c != "y" {

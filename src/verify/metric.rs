@@ -229,6 +229,14 @@ pub fn measure(m: &Metric, r: &RunData<'_>) -> std::result::Result<f64, String> 
             .map(|(s, _)| ((s.kinetic + s.internal + s.hourglass) / e0 - 1.0).abs())
             .fold(0.0, f64::max),
         MetricKind::EnergyBalance => samples.iter().map(|(_, e)| *e).fold(0.0, f64::max),
+        MetricKind::ErosionTime => {
+            samples
+                .iter()
+                .find(|(s, _)| s.eroded_elements > 0)
+                .ok_or("no element eroded")?
+                .0
+                .time
+        }
         MetricKind::StressError => {
             let [rxx, ryy, rxy] = m.stress.unwrap_or([0.0; 3]);
             let mut err = 0.0f64;

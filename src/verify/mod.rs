@@ -94,7 +94,7 @@ pub struct Outcome {
 
 /// The case files of `assets/verification/`, built into the binary so that `ricochet verify` runs
 /// from any folder: (file name, text), sorted by file name.
-pub const EMBEDDED: [(&str, &str); 15] = [
+pub const EMBEDDED: [(&str, &str); 17] = [
     (
         "disk_wall_10ms.toml",
         include_str!("../../assets/verification/disk_wall_10ms.toml"),
@@ -102,6 +102,14 @@ pub const EMBEDDED: [(&str, &str); 15] = [
     (
         "disk_wall_1ms.toml",
         include_str!("../../assets/verification/disk_wall_1ms.toml"),
+    ),
+    (
+        "failure_element.toml",
+        include_str!("../../assets/verification/failure_element.toml"),
+    ),
+    (
+        "failure_johnson_cook.toml",
+        include_str!("../../assets/verification/failure_johnson_cook.toml"),
     ),
     (
         "hertz_rigid.toml",

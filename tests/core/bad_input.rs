@@ -182,6 +182,7 @@ fn bad_plastic_materials() {
         ),
         &["material[0].johnson_cook.m", "unknown key"],
     );
+    bad_failure_keys();
     expect_rejected(
         "elastic_with_yield",
         &variant(
@@ -1713,4 +1714,91 @@ fn a_node_at_1e300_in_an_explicit_mesh_is_refused_at_once() {
         "took {:?}",
         t0.elapsed()
     );
+}
+
+/// The `failure` table of a material: every bad value exits 2 naming the key and the value.
+fn bad_failure_keys() {
+    let yielding = |failure: &str| plastic(&format!("yield_stress = 2.5e8\nfailure = {failure}"));
+    let jc = "johnson_cook = { d1 = 0.54, d2 = 4.89, d3 = -3.03, d4 = 0.014, d5 = 1.12 }";
+    expect_accepted(
+        "failure_ok",
+        &yielding(&format!(
+            "{{ plastic_strain = 0.8, {jc}, principal_strain = 0.5, tensile_pressure = 1.0e9 }}"
+        )),
+        true,
+    );
+    expect_accepted(
+        "failure_elastic_principal_ok",
+        &variant(
+            "poisson_ratio = 0.3",
+            "poisson_ratio = 0.3\nfailure = { principal_strain = 0.2, tensile_pressure = 1.0e9 }",
+        ),
+        false,
+    );
+    let cases: [(&str, String, &[&str]); 10] = [
+        (
+            "failure_not_a_table",
+            yielding("0.8"),
+            &["material[0].failure", "0.8"],
+        ),
+        (
+            "failure_empty",
+            yielding("{}"),
+            &["material[0].failure", "{}"],
+        ),
+        (
+            "failure_unknown_key",
+            yielding("{ plastic_strian = 0.8 }"),
+            &["material[0].failure.plastic_strian", "unknown key"],
+        ),
+        (
+            "failure_negative_plastic_strain",
+            yielding("{ plastic_strain = -0.8 }"),
+            &["material[0].failure.plastic_strain", "-0.8"],
+        ),
+        (
+            "failure_elastic_plastic_strain",
+            variant(
+                "poisson_ratio = 0.3",
+                "poisson_ratio = 0.3\nfailure = { plastic_strain = 0.8 }",
+            ),
+            &["material[0].failure.plastic_strain", "j2_plastic"],
+        ),
+        (
+            "failure_jc_missing_key",
+            yielding("{ johnson_cook = { d1 = 0.54, d2 = 4.89, d3 = -3.03, d4 = 0.014 } }"),
+            &["material[0].failure.johnson_cook.d5", "missing"],
+        ),
+        (
+            "failure_jc_nan",
+            yielding(
+                "{ johnson_cook = { d1 = 0.54, d2 = 4.89, d3 = nan, d4 = 0.014, d5 = 1.12 } }",
+            ),
+            &["material[0].failure.johnson_cook.d3", "NaN"],
+        ),
+        (
+            "failure_jc_negative_reference_strain",
+            yielding(
+                "{ johnson_cook = { d1 = -2.0, d2 = 1.0, d3 = -3.03, d4 = 0.014, d5 = 1.12 } }",
+            ),
+            &["material[0].failure.johnson_cook.d1", "-2.0", "d1 + d2"],
+        ),
+        (
+            "failure_zero_tensile_pressure",
+            yielding("{ tensile_pressure = 0.0 }"),
+            &["material[0].failure.tensile_pressure", "0.0"],
+        ),
+        (
+            "failure_principal_strain_string",
+            yielding("{ principal_strain = \"big\" }"),
+            &[
+                "material[0].failure.principal_strain",
+                "\"big\"",
+                "expected a number",
+            ],
+        ),
+    ];
+    for (case, text, needles) in cases {
+        expect_rejected(case, &text, needles);
+    }
 }

@@ -28,6 +28,7 @@ pub fn material(model: MaterialModel, youngs_modulus: f64, nu: f64, density: f64
         youngs_modulus,
         poisson_ratio: nu,
         plasticity: None,
+        failure: None,
     }
 }
 

@@ -12,7 +12,7 @@ use ricochet::step::cpu::CpuSolver;
 use crate::common::*;
 
 #[path = "../shared/restart.rs"]
-mod shared_restart;
+pub mod shared_restart;
 use shared_restart::{assert_same_outputs, copy_dir, run_interrupted_halfway, summary};
 
 fn asset(name: &str) -> PathBuf {

@@ -11,7 +11,7 @@ use ricochet::run::{run, schedule, RunResult};
 use ricochet::step::cpu::CpuSolver;
 use ricochet::step::Sample;
 
-use crate::{context, load, GPU_LOCK};
+use crate::{asset, context, load, GPU_LOCK};
 
 #[path = "../shared/contact_scenes.rs"]
 mod scenes;
@@ -568,5 +568,43 @@ fn gpu_augmented_lagrange_leaves_no_penetration_in_a_persistent_contact() {
                 "{what}: penetration {al:?} m (CPU {cpu:?}) against the penalty's {pen:?} m"
             );
         }
+    }
+}
+
+/// The small shipped scenes with Lagrange contact converge in every step on the GPU as on the
+/// CPU reference (`tests/core/contact.rs`, `shipped_scenes_converge_in_every_contact_step`):
+/// `contact_unconverged` 0 at the device's tolerance (`gpu::contact::solve::TOLERANCE`). The
+/// larger ones (notched plate, disk on a wall, the piles, the striker) were run by hand on
+/// lavapipe on 2026-11-27: 0 unconverged steps each (README, "GPU backend").
+#[test]
+fn small_shipped_scenes_converge_in_every_contact_step() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for name in [
+        "patch_test.toml",
+        "ring_crush.toml",
+        "rod_wall.toml",
+        "rods_impact.toml",
+    ] {
+        let (scene, model, plan) = load(&asset(name), name);
+        let mut gpu =
+            GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu solver");
+        let out = std::env::temp_dir().join(format!(
+            "ricochet-gpu-converge-{}-{name}",
+            std::process::id()
+        ));
+        let r = run(&scene, &model, &plan, &mut gpu, &out, None).expect("gpu run");
+        let _ = std::fs::remove_dir_all(&out);
+        let s = &r.summary;
+        println!(
+            "{name}: {} steps, sweeps {:.1} mean {} max, {} unconverged",
+            s.steps, s.contact_sweeps_mean, s.contact_sweeps_max, s.contact_unconverged
+        );
+        assert_eq!(s.status, "completed", "{name}: {}", s.message);
+        assert!(
+            s.contact_sweeps_mean > 0.0,
+            "{name}: no Lagrange constraint"
+        );
+        assert_eq!(s.contact_unconverged, 0, "{name}");
     }
 }

@@ -26,7 +26,7 @@ use crate::step::cpu::CpuSolver;
 use crate::step::{Counters, Event, Schedule, Solver};
 
 use super::contact::{ContactCounters, ContactOptions};
-use super::context::GpuContext;
+use super::context::{GpuContext, KernelKey};
 use super::kernels::{Features, Kernels};
 use super::layout::*;
 use super::state::{GpuState, MAX_BATCH};
@@ -42,7 +42,7 @@ pub const MIN_BATCH: u32 = 32;
 #[derive(Debug)]
 pub struct GpuSolver {
     ctx: Arc<GpuContext>,
-    kernels: Kernels,
+    kernels: Arc<Kernels>,
     state: GpuState,
     schedule: Schedule,
     names: Names,
@@ -112,6 +112,13 @@ impl GpuSolver {
         fused: Option<bool>,
         contact: ContactOptions,
     ) -> Result<Self> {
+        if plan.has(Stage::Failure) {
+            return Err(Error::Gpu(
+                "material failure and erosion (a material's `failure`) run on the CPU reference \
+                 only so far: use --backend cpu"
+                    .into(),
+            ));
+        }
         let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let any = |f: &dyn Fn(&crate::model::BodyModel) -> bool| model.bodies.iter().any(f);
         use crate::scene::{ContactMethod, Formulation, HourglassForm, MaterialModel};
@@ -150,14 +157,32 @@ impl GpuSolver {
             )));
         }
         let device = &ctx.device;
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let kernels = Kernels::new(
-            device,
+        let key = KernelKey {
             features,
-            plan.has(Stage::VelocityBoundaries),
-            plan.has(Stage::Contact),
-            plan.has(Stage::Pressure),
-        );
+            boundaries: plan.has(Stage::VelocityBoundaries),
+            contact: plan.has(Stage::Contact),
+            pressure: plan.has(Stage::Pressure),
+        };
+        let mut rejected = None;
+        let kernels = ctx.kernels.get_or_compile(key, || {
+            let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+            let kernels = Kernels::new(device, features, key.boundaries, key.contact, key.pressure);
+            match pollster::block_on(scope.pop()) {
+                None => Some(kernels),
+                Some(e) => {
+                    rejected = Some(e);
+                    None
+                }
+            }
+        });
+        let Some(kernels) = kernels else {
+            return Err(Error::Gpu(format!(
+                "kernels rejected by {}: {}",
+                ctx.adapter_name(),
+                rejected.map_or_else(|| "no reason given".to_string(), |e| e.to_string())
+            )));
+        };
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let state = GpuState::new(
             device,
             &kernels,
@@ -170,7 +195,7 @@ impl GpuSolver {
         );
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
-                "kernel or buffer setup rejected by {}: {e}",
+                "buffer setup rejected by {}: {e}",
                 ctx.adapter_name()
             )));
         }

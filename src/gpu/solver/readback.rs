@@ -145,6 +145,8 @@ impl GpuSolver {
             hourglass: w(6) as f64,
             viscous: w(7) as f64,
             plastic: if pw > 0 { w(9) as f64 } else { 0.0 },
+            eroded_elements: 0,
+            eroded_energy: 0.0,
             external: w(8) as f64,
             contact: 0.0,
             friction: 0.0,

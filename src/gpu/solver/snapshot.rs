@@ -48,6 +48,8 @@ impl GpuSolver {
             displacement,
             velocity,
             plastic,
+            eroded: Vec::new(),
+            damage: Vec::new(),
         })
     }
 

@@ -1,0 +1,336 @@
+//! Material failure and erosion (CPU reference): a single element pulled in uniaxial plane
+//! strain erodes at the step where its plastic strain reaches the limit (closed form); Johnson-
+//! Cook damage at zero triaxiality (simple shear) is d(eps_p) / (d1 + d2) summed and erodes the
+//! element at the closed form's time; a freely stretching block whose elements erode keeps its
+//! energy balance with the `eroded_energy` column, its eroded elements carry no force and leave
+//! the stable step, and its nodes fly on as free masses; the plan has the failure stage only with
+//! failure; the history, summary, VTU `eroded` and `damage` cell fields and the plot.
+
+use ricochet::plan::Stage;
+use ricochet::step::cpu::CpuSolver;
+use ricochet::step::{Event, Sample, Solver};
+
+use crate::common::*;
+
+#[path = "../shared/failure_scene.rs"]
+mod failure_scene;
+use failure_scene::*;
+
+/// Steps `solver` one at a time until element 0 erodes or the run ends; the displacements u_n
+/// and plastic strain of the step that eroded it, and of the step before (None if it never did).
+#[allow(clippy::type_complexity)]
+fn step_until_eroded(
+    solver: &mut CpuSolver,
+) -> Option<((f64, Vec<[f64; 2]>, f64), (f64, Vec<[f64; 2]>, f64))> {
+    let mut before = (0.0, solver.displacement().to_vec(), 0.0);
+    while !solver.finished() {
+        let now = (solver.time(), solver.displacement().to_vec());
+        solver.run_steps(1);
+        let alpha = solver.plastic_now().unwrap()[0].alpha;
+        if solver.eroded()[0] {
+            return Some((before, (now.0, now.1, alpha)));
+        }
+        before = (now.0, now.1, alpha);
+    }
+    None
+}
+
+/// The stretch of the single element from its displacements (top node minus bottom node).
+fn stretch(u: &[[f64; 2]], model: &ricochet::model::Model) -> f64 {
+    let top = model
+        .position
+        .iter()
+        .position(|p| (p[1] - SIDE).abs() < 1e-12)
+        .unwrap();
+    let bottom = model.position.iter().position(|p| p[1] == 0.0).unwrap();
+    1.0 + (u[top][1] - u[bottom][1]) / SIDE
+}
+
+#[test]
+fn a_single_element_erodes_at_the_step_its_plastic_strain_reaches_the_limit() {
+    let limit = 0.004;
+    let text = tension_scene(100.0, 1.0e-4, &format!("{{ plastic_strain = {limit} }}"));
+    let (scene, model, plan) = build(&text);
+    assert!(plan.has(Stage::Failure));
+    let mut solver = CpuSolver::new(model.clone(), plan, ricochet::run::schedule(&scene));
+    let (before, at) = step_until_eroded(&mut solver).expect("the element erodes");
+    let (l0, l1) = (stretch(&before.1, &model), stretch(&at.1, &model));
+    // The plastic strain is the closed form's at every step, below the limit the step before and
+    // at or past it on the step that eroded the element.
+    for (l, alpha) in [(l0, before.2), (l1, at.2)] {
+        let closed = tension_plastic_strain(l);
+        assert!(
+            (alpha - closed).abs() < 1e-9 * limit,
+            "alpha {alpha} vs closed form {closed} at stretch {l}"
+        );
+    }
+    assert!(before.2 < limit && at.2 >= limit, "{before:?} {at:?}");
+    // The closed form's failure stretch lies between the two steps.
+    assert!(tension_plastic_strain(l0) < limit && tension_plastic_strain(l1) >= limit);
+    println!(
+        "eroded at t = {:e} s, stretch {l1} (closed form's stretch between {l0} and {l1})",
+        at.0
+    );
+    // Eroded at once: the element gives no force; the run goes on to its end.
+    let mut events = Vec::new();
+    while !solver.finished() {
+        solver.advance(&mut events).unwrap();
+    }
+    assert!(
+        events.iter().any(|e| matches!(e, Event::Done)),
+        "{events:?}"
+    );
+    assert_eq!(solver.eroded_count(), 1);
+}
+
+#[test]
+fn johnson_cook_damage_at_zero_triaxiality_erodes_at_the_closed_form_time() {
+    // Simple shear: sigma* = 0, so eps_f = d1 + d2 whatever d3; d4's rate term is off.
+    let (d1, d2) = (0.1, 0.2);
+    let eps_f = d1 + d2;
+    let rate = 1000.0;
+    let failure =
+        format!("{{ johnson_cook = {{ d1 = {d1}, d2 = {d2}, d3 = -1.5, d4 = 0.0, d5 = 0.0 }} }}");
+    let (scene, model, plan) = build(&shear_scene(rate, 1.0e-3, &failure));
+    let mut solver = CpuSolver::new(model, plan, ricochet::run::schedule(&scene));
+    let mut t_fail = None;
+    let mut last_alpha = 0.0;
+    while !solver.finished() {
+        let t = solver.time();
+        solver.run_steps(1);
+        let alpha = solver.plastic_now().unwrap()[0].alpha;
+        let d = solver.damage()[0];
+        // D = sum d(eps_p) / eps_f = eps_p / eps_f at constant triaxiality.
+        assert!(
+            (d - alpha / eps_f).abs() < 1e-10 * d.max(1e-3),
+            "t {t:e}: D {d} vs {}",
+            alpha / eps_f
+        );
+        if solver.eroded()[0] {
+            assert!(
+                d >= 1.0 && last_alpha < eps_f,
+                "D {d}, alpha before {last_alpha}"
+            );
+            t_fail = Some(t);
+            break;
+        }
+        last_alpha = alpha;
+    }
+    let t_fail = t_fail.expect("the element erodes");
+    let closed = shear_strain_at(eps_f) / rate;
+    let err = (t_fail - closed).abs() / closed;
+    println!("failure at t = {t_fail:e} s, closed form {closed:e} s: {err:.2e} relative");
+    assert!(err < 3e-3, "{t_fail:e} vs {closed:e}");
+}
+
+/// The history samples and snapshots of a run of `text` to its end.
+fn run_events(text: &str) -> (CpuSolver, Vec<Sample>, Vec<ricochet::step::Snapshot>) {
+    let (scene, model, plan) = build(text);
+    let mut solver = CpuSolver::new(model, plan, ricochet::run::schedule(&scene));
+    let (mut samples, mut snaps) = (Vec::new(), Vec::new());
+    let mut events = Vec::new();
+    while !solver.finished() {
+        solver.advance(&mut events).unwrap();
+        for e in events.drain(..) {
+            match e {
+                Event::Sample(s) => samples.push(s),
+                Event::Snapshot(s) => snaps.push(s),
+                Event::Failed(f) => panic!("run failed: {f:?}"),
+                Event::Done => {}
+            }
+        }
+    }
+    (solver, samples, snaps)
+}
+
+#[test]
+fn eroded_elements_leave_the_energy_balanced_and_their_nodes_fly_free() {
+    let text = stretching_block(2000.0, 2.0e-5, 0.01);
+    let (solver, samples, snaps) = run_events(&text);
+    let last = samples.last().unwrap();
+    let ne = solver.model().element_count();
+    assert!(
+        last.eroded_elements > 0 && last.eroded_elements as usize <= ne,
+        "{} of {ne} eroded",
+        last.eroded_elements
+    );
+    assert_eq!(
+        solver.eroded().iter().filter(|&&e| e).count() as u64,
+        last.eroded_elements
+    );
+    assert!(last.eroded_energy > 0.0);
+    // The energy audit with the eroded energy: as tight as without erosion.
+    let mut audit = ricochet::output::history::EnergyAudit::default();
+    for s in &samples {
+        audit.error(s);
+    }
+    println!(
+        "{} of {ne} eroded, eroded energy {:e} J, max energy error {:e}",
+        last.eroded_elements, last.eroded_energy, audit.max_error
+    );
+    assert!(audit.max_error < 1e-3, "{}", audit.max_error);
+    // The eroded count never falls, and the snapshots carry the eroded flags.
+    assert!(samples
+        .windows(2)
+        .all(|w| w[1].eroded_elements >= w[0].eroded_elements));
+    assert!(snaps.iter().all(|s| s.eroded.len() == ne));
+    // The stable step ignores eroded elements: it is that of the elements left.
+    let (dt, e) = solver.stable_step();
+    assert!(!solver.eroded()[e] || dt == f64::INFINITY);
+}
+
+#[test]
+fn a_node_of_eroded_elements_only_moves_on_at_constant_velocity() {
+    // Every element erodes in the stretched block (a low limit): every node is a free mass.
+    let text = stretching_block(2000.0, 2.0e-5, 1.0e-4);
+    let (mut solver, samples, _) = run_events(&text);
+    assert!(solver.eroded().iter().all(|&e| e), "{:?}", solver.eroded());
+    let t = samples
+        .iter()
+        .position(|s| s.eroded_elements as usize == solver.eroded().len());
+    let t = t.expect("all eroded before the end");
+    // From then on the kinetic energy is constant and the momentum of the block too.
+    let k0 = samples[t + 1].kinetic;
+    for s in &samples[t + 1..] {
+        assert!(
+            (s.kinetic - k0).abs() <= 1e-12 * k0,
+            "{} vs {k0}",
+            s.kinetic
+        );
+    }
+    let v = solver.velocity().to_vec();
+    solver.run_steps(10);
+    assert_eq!(v, solver.velocity());
+}
+
+#[test]
+fn a_scene_without_failure_has_no_failure_stage_or_state() {
+    let text = tension_scene(100.0, 1.0e-5, "{ plastic_strain = 0.5 }");
+    let plain = text.replace("failure = { plastic_strain = 0.5 }\n", "");
+    let (scene, model, plan) = build(&plain);
+    assert!(!plan.has(Stage::Failure));
+    assert!(!model.has_failure());
+    let mut solver = CpuSolver::new(model, plan, ricochet::run::schedule(&scene));
+    solver.run_steps(5);
+    assert!(solver.eroded().is_empty() && solver.damage().is_empty());
+    // With plastic_strain only, no damage state either.
+    let (scene, model, plan) = build(&text);
+    assert!(plan.has(Stage::Failure));
+    let solver = CpuSolver::new(model, plan, ricochet::run::schedule(&scene));
+    assert_eq!(solver.eroded().len(), 1);
+    assert!(solver.damage().is_empty());
+    let _ = scene;
+}
+
+#[test]
+fn outputs_carry_the_eroded_columns_fields_and_summary() {
+    let text = stretching_block(2000.0, 2.0e-5, 0.01)
+        .replace("plastic_strain = 0.01", "plastic_strain = 0.01, johnson_cook = { d1 = 5.0, d2 = 1.0, d3 = -1.5, d4 = 0.0, d5 = 0.0 }");
+    let dir = tmp_dir("failure-outputs");
+    let file = dir.join("block.toml");
+    std::fs::write(&file, &text).unwrap();
+    let out = dir.join("out");
+    let o = run_cpu(&file, &out, &[]);
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    let (header, rows) = read_csv(&out.join("history.csv"));
+    let (n, w) = (
+        column(&header, "eroded_elements"),
+        column(&header, "eroded_energy"),
+    );
+    assert_eq!(
+        &header[n - 2..=w + 1],
+        &[
+            "viscous_work",
+            "plastic_work",
+            "eroded_elements",
+            "eroded_energy",
+            "contact_energy"
+        ]
+    );
+    let last = rows.last().unwrap();
+    assert!(last[n] > 0.0 && last[w] > 0.0, "{last:?}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["eroded_elements"].as_f64(), Some(last[n]));
+    let failure = summary["failure"][0].as_str().unwrap();
+    assert!(
+        failure.starts_with("aluminium: plastic_strain 0.01, johnson_cook (d1 5"),
+        "{failure}"
+    );
+    // `check` says what fails.
+    let c = run_bin(&["check", file.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&c.stdout);
+    assert!(stdout.contains("failure: plastic_strain 0.01"), "{stdout}");
+    assert!(stdout.contains("failure"), "{stdout}");
+    // The last snapshot's VTU: an `eroded` cell field (1 on the eroded cells, whose stress is 0)
+    // and the damage.
+    let script = r#"
+import sys, meshio, glob
+m = meshio.read(sorted(glob.glob(sys.argv[1] + "/fields/*.vtu"))[-1])
+e = m.cell_data["eroded"][0]
+vm = m.cell_data["von_mises"][0]
+d = m.cell_data["damage"][0]
+print(int(e.sum()), len(e), float(abs(vm[e == 1]).max()) if e.sum() else 0.0, float(d.max()))
+"#;
+    let py = std::process::Command::new("python3")
+        .args(["-c", script, out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let line = String::from_utf8_lossy(&py.stdout);
+    let v: Vec<f64> = line
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert_eq!(v.len(), 4, "{line} {}", String::from_utf8_lossy(&py.stderr));
+    assert_eq!(v[0], last[n], "{line}");
+    assert_eq!(v[1], 32.0);
+    assert_eq!(v[2], 0.0);
+    assert!(v[3] > 0.0 && v[3] < 1.0, "{line}");
+    // The plot leaves the eroded cells out (their values are NaN for the colour range).
+    let p = run_bin(&["plot", out.to_str().unwrap(), "--field", "von_mises"]);
+    assert_eq!(p.status.code(), Some(0), "{p:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+use crate::restart::shared_restart;
+
+#[test]
+fn a_run_with_erosion_restarts_to_the_same_outputs() {
+    // Interrupted halfway, after some elements eroded: the eroded flags and damage are part of
+    // the checkpoint, and the restart ends with the outputs of the run never stopped.
+    let text = stretching_block(2000.0, 2.0e-5, 0.01).replace(
+        "plastic_strain = 0.01",
+        "plastic_strain = 0.01, johnson_cook = { d1 = 0.05, d2 = 0.01, d3 = -1.5, d4 = 0.0, d5 = 0.0 }",
+    );
+    let base = tmp_dir("failure-restart");
+    let path = base.join("block.toml");
+    std::fs::write(&path, &text).unwrap();
+    let a = base.join("a");
+    let o = run_cpu(&path, &a, &[]);
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    let (scene, model, plan) = build(&text);
+    let mut solver = CpuSolver::new(model.clone(), plan.clone(), ricochet::run::schedule(&scene));
+    let b = base.join("b");
+    shared_restart::run_interrupted_halfway(
+        &scene,
+        &model,
+        &plan,
+        &mut solver,
+        &b,
+        &path,
+        &text,
+        None,
+    );
+    assert!(
+        solver.eroded_count() > 0,
+        "nothing eroded by the interruption"
+    );
+    assert!(solver.eroded_count() < model.element_count() as u64);
+    let o = run_bin(&["run", "--restart", b.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    shared_restart::assert_same_outputs(&a, &b);
+    let (header, rows) = read_csv(&b.join("history.csv"));
+    let n = column(&header, "eroded_elements");
+    assert!(rows.last().unwrap()[n] >= solver.eroded_count() as f64);
+    let _ = std::fs::remove_dir_all(&base);
+}
