@@ -72,7 +72,7 @@ struct ContactParams {
     o_list: u32,          // slots in colour order
     o_iface: u32,         // first slot of each interface (n_ifaces + 1)
     o_act: u32,           // the step's Lagrange slots by colour (one-workgroup solve)
-    o_mask: u32,          // packed index per local node (one-workgroup solve's `pack`)
+    o_mask: u32,          // colours taken per local node (one-workgroup solve's greedy colouring)
     f_rf: u32,            // fws offset: friction partials per slot run (with friction)
     one: f32,             // 1.0, unknown to the compiler (report_end's compensated sums)
     n_nodes: u32,         // v_prev[n_nodes + g]: node g's velocity residual (node.wgsl)

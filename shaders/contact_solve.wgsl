@@ -6,10 +6,8 @@
 // active-set update (free Lagrange slots re-checked at the corrected positions, more sweeps when
 // any penetrates), ACTIVE_SET_ROUNDS rounds at most. Compiled after contact_narrow.wgsl.
 //
-// Two paths, chosen by size on the host: `solve_one`, every sweep in one workgroup over the step's
-// Lagrange constraints, compacted, coloured (Jones-Plassmann rounds over the search's hashed
-// priorities) and partitioned by colour by all its invocations (`compact`; colours separated by
-// barriers; the fastest for small contact sets), and `sweep_color` + `recheck`, one
+// Two paths, chosen by size on the host: `solve_one`, every sweep in one workgroup (colours
+// separated by barriers; the fastest for small contact sets), and `sweep_color` + `recheck`, one
 // dispatch per colour and sweep over as many workgroups as the colour needs. With many active
 // slots (cc.p.split) the one-workgroup path leaves its re-checks to `recheck_active`, one thread
 // per active slot over many workgroups, dispatched between its rounds: the same constraints and
@@ -57,250 +55,91 @@ fn list_end(c: u32) -> u32 {
 // Colours of the one-workgroup solve: at most 32 by node masks, then one serial colour.
 const SERIAL: u32 = 32u;
 
-// The search's hashed priority of slot k (contact_search.wgsl `priority`): a bijection of u32,
-// so two slots never tie.
-fn priority(k: u32) -> u32 {
-    var x = k * 747796405u + 2891336453u;
-    x = ((x >> ((x >> 28u) + 4u)) ^ x) * 277803737u;
-    return (x >> 22u) ^ x;
-}
-
-// Whether slot j goes before slot k in the colouring (contact_search.wgsl `outranks`).
-fn outranks(j: u32, k: u32) -> bool {
-    let pj = priority(j);
-    let pk = priority(k);
-    return pj > pk || (pj == pk && j > k);
-}
-
-// The exclusive prefix of the lanes' `x` in lane order for lane l (a Hillis-Steele scan over
-// sh_prefix, log2(SG) steps with barriers: integer sums, the same on every run); their total in
-// sh_total, read with workgroupUniformLoad. Every lane calls it, in uniform control flow.
-fn lane_scan(l: u32, x: u32) -> u32 {
-    sh_prefix[l] = x;
-    workgroupBarrier();
-    for (var o = 1u; o < SG; o <<= 1u) {
-        var t = sh_prefix[l];
-        if (l >= o) {
-            t += sh_prefix[l - o];
-        }
-        workgroupBarrier();
-        sh_prefix[l] = t;
-        workgroupBarrier();
-    }
-    let inclusive = sh_prefix[l];
-    if (l == SG - 1u) {
-        sh_total = inclusive;
-    }
-    workgroupBarrier();
-    return inclusive - x;
-}
-
-// Lane l's contiguous chunk [x, y) of n items.
-fn lane_chunk(l: u32, n: u32) -> vec2<u32> {
-    let chunk = (n + SG - 1u) / SG;
-    let begin = min(l * chunk, n);
-    return vec2<u32>(begin, min(begin + chunk, n));
-}
-
-// Whether slot j's Lagrange constraint `c` acts on local node i.
-fn acts_on(c: Cons, j: u32, i: u32) -> bool {
-    return c.kind == KIND_LAGRANGE && (slots[j].s == i || c.a == i || c.b == i);
-}
-
-// The first slot (the adjacency lists of the search are sorted) whose Lagrange constraint acts
-// on node i: the node's owner, which lists it for the packed rows.
-fn owner(i: u32) -> u32 {
-    let b = cc.p.cand_capacity;
-    let end = ws[cc.p.o_noff + i + 1u];
-    for (var q = ws[cc.p.o_noff + i]; q < end; q++) {
-        let j = grow[b + q];
-        if (acts_on(cons[j], j, i)) {
-            return j;
-        }
-    }
-    return NONE;
-}
-
-// The colours taken at node i by the Lagrange constraints that outrank slot k's (their colours in
-// ws[o_color + slot]), or NONE when one of them is not coloured yet.
-fn taken_at(i: u32, k: u32) -> u32 {
+fn mask_of(i: u32) -> u32 {
     if (i == NONE) {
         return 0u;
     }
-    var used = 0u;
-    let b = cc.p.cand_capacity;
-    let end = ws[cc.p.o_noff + i + 1u];
-    for (var q = ws[cc.p.o_noff + i]; q < end; q++) {
-        let j = grow[b + q];
-        if (j == k || !outranks(j, k) || !acts_on(cons[j], j, i)) {
-            continue;
-        }
-        let col = ws[cc.p.o_color + j];
-        if (col == NONE) {
-            return NONE;
-        }
-        used |= 1u << min(col, 31u);
-    }
-    return used;
+    return ws[cc.p.o_mask + i];
 }
 
-// Slot k's colour in this round (Jones-Plassmann, first fit): NONE while a neighbour that
-// outranks it (a Lagrange constraint on one of its nodes) is uncoloured; else the lowest colour
-// none of those took, SERIAL when all 32 are. The neighbours of lower priority take their colours
-// after it. So the colouring is the greedy one in priority order, whatever the order of the
-// threads: it depends only on the neighbour sets and the priorities.
-fn color_of(k: u32) -> u32 {
-    let c = cons[k];
-    let ts = taken_at(slots[k].s, k);
-    let ta = taken_at(c.a, k);
-    let tb = taken_at(c.b, k);
-    if (ts == NONE || ta == NONE || tb == NONE) {
-        return NONE;
+// Marks node i with colour bit c; a node seen for the first time joins the list of the
+// constraints' nodes (ws[o_nlist..], sh_nn of them) that the extrapolation moves on.
+fn mark_node(i: u32, c: u32) {
+    if (i == NONE) {
+        return;
     }
-    let used = ts | ta | tb;
-    if (used == 0xffffffffu) {
-        return SERIAL;
+    if (ws[cc.p.o_mask + i] == 0u) {
+        ws[cc.p.o_nlist + sh_nn] = i;
+        sh_nn += 1u;
     }
-    return firstTrailingBit(~used);
+    ws[cc.p.o_mask + i] |= 1u << c;
 }
 
-// The nodes of slot k's constraint that it owns (`owner`), as bits 0 (slave), 1 (a), 2 (b).
-fn owned(k: u32) -> u32 {
-    let c = cons[k];
-    let s = slots[k].s;
-    var bits = select(0u, 1u, owner(s) == k);
-    if (c.a != NONE) {
-        if (c.a != s && owner(c.a) == k) {
-            bits |= 2u;
-        }
-        if (c.b != s && c.b != c.a && owner(c.b) == k) {
-            bits |= 4u;
-        }
-    }
-    return bits;
-}
-
-// The step's Lagrange constraints compacted, coloured and gathered by colour into ws[o_act..]
-// (sh_off: offsets), their nodes listed (ws[o_nlist..], sh_nn of them), with the work shared by
-// every invocation and the same result on every run:
-// 1. the Lagrange slots of the active ones in slot order into ws[o_list..] (each invocation a
-//    contiguous chunk, offsets by a workgroup scan), marked uncoloured in ws[o_color + slot];
-// 2. Jones-Plassmann rounds (`color_of`; the round's colours written in a second phase, so a
-//    round reads only the colours of the rounds before it), each constraint's colour kept by
-//    its position in ws[o_cidx..] until `pack` uses those words;
-// 3. each constraint's nodes that it owns (`owner`) listed in slot order by a scan;
-// 4. a stable partition by colour: one scan per colour in use, slot order inside a colour.
-// A constraint that finds all 32 colours taken goes to the serial colour, which invocation 0
-// sweeps alone.
+// The step's Lagrange constraints coloured greedily in slot order by their own nodes (slave and
+// segment ends), as on the CPU reference's search, and gathered by colour into ws[o_act..]
+// (sh_off: offsets): sequential in invocation 0, so the same on every run. A constraint that
+// finds all 32 colours taken goes to the serial colour, which invocation 0 sweeps alone.
 fn compact(l: u32) {
+    // The Lagrange slots in slot order into ws[o_color..]: each invocation a contiguous chunk
+    // of the active slots, offsets by a prefix over the invocations.
     let n = active_count();
-    let ch = lane_chunk(l, n);
+    let chunk = (n + SG - 1u) / SG;
+    let begin = min(l * chunk, n);
+    let end = min(begin + chunk, n);
     var mine = 0u;
-    for (var j = ch.x; j < ch.y; j++) {
+    for (var j = begin; j < end; j++) {
         if (cons[active_slot(j)].kind == KIND_LAGRANGE) {
             mine += 1u;
         }
     }
-    var at = lane_scan(l, mine);
-    let na = workgroupUniformLoad(&sh_total);
-    for (var j = ch.x; j < ch.y; j++) {
+    var at = workgroup_prefix(l, mine);
+    for (var j = begin; j < end; j++) {
         let k = active_slot(j);
         if (cons[k].kind == KIND_LAGRANGE) {
-            ws[cc.p.o_list + at] = k;
-            ws[cc.p.o_color + k] = NONE;
+            ws[cc.p.o_color + at] = k;
             at += 1u;
         }
     }
-    if (l == 0u) {
-        atomicStore(&sh_max, 0u);
-    }
     storageBarrier();
     workgroupBarrier();
-    let scratch = cc.p.o_cidx;
-    for (var round = 0u; round <= na; round++) {
-        var pending = 0.0;
-        for (var q = l; q < na; q += SG) {
-            let k = ws[cc.p.o_list + q];
-            if (ws[cc.p.o_color + k] == NONE) {
-                let col = color_of(k);
-                ws[scratch + q] = col;
-                if (col == NONE) {
-                    pending = 1.0;
-                }
-            }
-        }
-        // (Every lane has read this round's colours before any is written.)
-        let more = any_positive(l, pending);
-        for (var q = l; q < na; q += SG) {
-            let k = ws[cc.p.o_list + q];
-            let col = ws[scratch + q];
-            if (ws[cc.p.o_color + k] == NONE && col != NONE) {
-                ws[cc.p.o_color + k] = col;
-                atomicMax(&sh_max, col + 1u);
-            }
-        }
-        storageBarrier();
-        workgroupBarrier();
-        if (!more) {
-            break;
-        }
-    }
-    // The constraints' nodes, each listed once by its owner, in the owners' slot order.
-    let cq = lane_chunk(l, na);
-    var count = 0u;
-    for (var q = cq.x; q < cq.y; q++) {
-        let bits = owned(ws[cc.p.o_list + q]);
-        ws[cc.p.o_act + q] = bits;
-        count += countOneBits(bits);
-    }
-    var to = lane_scan(l, count);
-    for (var q = cq.x; q < cq.y; q++) {
-        let k = ws[cc.p.o_list + q];
-        let bits = ws[cc.p.o_act + q];
-        let c = cons[k];
-        if ((bits & 1u) != 0u) {
-            ws[cc.p.o_nlist + to] = slots[k].s;
-            to += 1u;
-        }
-        if ((bits & 2u) != 0u) {
-            ws[cc.p.o_nlist + to] = c.a;
-            to += 1u;
-        }
-        if ((bits & 4u) != 0u) {
-            ws[cc.p.o_nlist + to] = c.b;
-            to += 1u;
-        }
-    }
     if (l == 0u) {
-        sh_nn = sh_total;
-        sh_nc = atomicLoad(&sh_max);
-    }
-    storageBarrier();
-    let colors = workgroupUniformLoad(&sh_nc);
-    // The stable partition by colour (the colours of the positions in ws[scratch..]).
-    var base = 0u;
-    for (var col = 0u; col < colors; col++) {
-        var mine_c = 0u;
-        for (var q = cq.x; q < cq.y; q++) {
-            if (ws[scratch + q] == col) {
-                mine_c += 1u;
+        let na = sh_total;
+        sh_nn = 0u;
+        var count: array<u32, 33>;
+        for (var c = 0u; c <= SERIAL; c++) {
+            count[c] = 0u;
+        }
+        for (var j = 0u; j < na; j++) {
+            let k = ws[cc.p.o_color + j];
+            let c = cons[k];
+            let s = slots[k].s;
+            let used = mask_of(s) | mask_of(c.a) | mask_of(c.b);
+            var col = SERIAL;
+            if (used != 0xffffffffu) {
+                col = firstTrailingBit(~used);
             }
+            // (A serial constraint marks its nodes with colour 31 only to list them: a later
+            // constraint on them then avoids colour 31, which changes nothing else.)
+            let bit = min(col, 31u);
+            mark_node(s, bit);
+            mark_node(c.a, bit);
+            mark_node(c.b, bit);
+            ws[cc.p.o_list + j] = col;
+            count[col] += 1u;
         }
-        var put = base + lane_scan(l, mine_c);
-        for (var q = cq.x; q < cq.y; q++) {
-            if (ws[scratch + q] == col) {
-                ws[cc.p.o_act + put] = ws[cc.p.o_list + q];
-                put += 1u;
-            }
+        var acc = 0u;
+        for (var c = 0u; c <= SERIAL; c++) {
+            sh_off[c] = acc;
+            acc += count[c];
+            count[c] = 0u;
         }
-        if (l == 0u) {
-            sh_off[col] = base;
-        }
-        base += workgroupUniformLoad(&sh_total);
-    }
-    if (l == 0u) {
-        for (var col = colors; col <= SERIAL + 1u; col++) {
-            sh_off[col] = base;
+        sh_off[SERIAL + 1u] = acc;
+        for (var j = 0u; j < na; j++) {
+            let k = ws[cc.p.o_color + j];
+            let c = cons[k];
+            let col = ws[cc.p.o_list + j];
+            ws[cc.p.o_act + sh_off[col] + count[col]] = k;
+            count[col] += 1u;
         }
     }
     storageBarrier();
