@@ -115,8 +115,9 @@ class Scene:
     def check(self) -> dict[str, Any]:
         """The plan that ``ricochet check`` prints, as a dict: nodes, elements, bodies (mass,
         wave speed, hourglass form), the stable and chosen time step and the number of steps,
-        contact (tables, walls, margin, methods), the overlaps at t = 0, the memory estimate,
-        history rows and snapshots, and the stages (``plan``).
+        contact (tables, walls, margin, methods), friction, the overlaps at t = 0, pressures,
+        gravity and mass damping, the memory estimate, history rows and snapshots, and the
+        stages (``plan``). The Gmsh groups and load curves that ``check`` prints are left out.
 
         Raises:
             SceneError: the model cannot be built, or a fixed ``run.time_step`` exceeds the

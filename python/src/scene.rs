@@ -201,7 +201,9 @@ impl SceneCore {
     }
 }
 
-/// The plan of `scene` as `ricochet check` prints it (`src/cli/check.rs`), as JSON.
+/// The plan of `scene` as `ricochet check` prints it (`src/cli/check.rs`), as JSON: the model
+/// and its bodies, the steps, contact (tables, methods, friction, overlaps), loads, memory,
+/// outputs and stages (the Gmsh groups and load curves it prints are left out).
 ///
 /// # Errors
 /// As [`ricochet::run::model_and_plan`]; [`ricochet::Error::Invalid`] for a fixed
@@ -269,8 +271,28 @@ fn plan(scene: &Scene) -> Result<serde_json::Value, ricochet::Error> {
         .iter()
         .map(|o| json!({"interface": o.interface, "node": o.node, "depth": o.depth}))
         .collect();
+    let friction: Vec<serde_json::Value> = model
+        .contacts
+        .iter()
+        .map(|c| (&c.name, c.friction))
+        .chain(model.walls.iter().map(|w| (&w.name, w.friction)))
+        .filter(|(_, mu)| *mu > 0.0)
+        .map(|(name, mu)| json!({"name": name, "mu": mu}))
+        .collect();
+    let pressures: Vec<serde_json::Value> = model
+        .pressures
+        .iter()
+        .map(
+            |p| json!({"value": p.value, "edges": p.edges, "nodes": p.nodes.len(), "ramp": p.ramp}),
+        )
+        .collect();
     let r = &scene.run;
     Ok(json!({
+        "friction": friction,
+        "pressures": pressures,
+        "gravity": model.gravity,
+        "gravity_ramp": model.gravity_ramp,
+        "mass_damping": model.mass_damping,
         "scene": scene.name,
         "file": scene.file.to_string_lossy(),
         "nodes": plan.nodes,
