@@ -8,6 +8,7 @@ study."""
 from __future__ import annotations
 
 import io
+import multiprocessing
 import os
 import shutil
 import sys
@@ -53,7 +54,9 @@ def study(
             ``[[collect]]`` dicts (each with its ``name``).
         executor: where the cases run: any ``concurrent.futures.Executor`` whose workers can
             import ricochet (Dask: ``client.get_executor()``); by default a local
-            ``ProcessPoolExecutor`` with one worker per CPU core.
+            ``ProcessPoolExecutor`` with one spawned worker per CPU core (a script that calls
+            ``study`` then needs the ``if __name__ == "__main__":`` guard, as any spawned pool
+            does).
         kind: ``"grid"`` (every combination), ``"zip"`` (lists side by side) or ``"lhs"``
             (a seeded Latin hypercube of ``samples`` points over ``min``..``max``). Threshold
             searches run through ``ricochet study``.
@@ -80,7 +83,9 @@ def study(
     if progress:
         print(f"study {study_name}: {len(ids)} cases ({kind}); folder {root}", file=sys.stderr)
     own = executor is None
-    pool = executor if executor is not None else ProcessPoolExecutor(max_workers=os.cpu_count() or 1)
+    # Spawned, not forked: a process that has opened a GPU device has driver threads that a
+    # fork would copy mid-flight.
+    pool = executor if executor is not None else ProcessPoolExecutor(max_workers=os.cpu_count() or 1, mp_context=multiprocessing.get_context("spawn"))
     try:
         futures = [pool.submit(run_case, os.fspath(root), i, use_backend) for i in ids]
         done = 0
