@@ -17,9 +17,9 @@ pub const MAX_SWEEPS: usize = 500;
 /// Below it, what the sweeps still change are the near-null modes of two passes' constraints on
 /// one interface (a smooth push of one pass against the other, which moves the gaps by a fraction
 /// of a percent a sweep) after the fast modes are gone in 5 to 50 sweeps. Measured 2026-11-27 on
-/// the CPU reference with the 2 x 2 blocks of [`ContactSet::pair_blocks`]: at 1e-13 (the old
-/// stop, 1e-12 measured) the 10^4-element striker's first 1e-5 s stopped at the sweep limit in 15 of 379 steps,
-/// `ring_crush.toml` in 26 of 401; at 1e-6 the striker converged in every step (33.6 sweeps a
+/// the CPU reference with the 2 x 2 blocks of `ContactSet::pair_blocks`: near the old stop
+/// (1e-13; 1e-12 measured) the 10^4-element striker's first 1e-5 s stopped at the sweep limit in
+/// 15 of 379 steps, `ring_crush.toml` in 26 of 401; at 1e-6 the striker converged in every step (33.6 sweeps a
 /// step) and ring_crush stopped in 10 steps with residuals up to 3.2e-6; at 1e-5 every shipped
 /// scene converges in every step.
 pub const SWEEP_TOLERANCE: f64 = 1e-5;
