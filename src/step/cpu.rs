@@ -1,8 +1,9 @@
 //! The CPU reference solver (f64, one thread). Every GPU kernel is tested against this path.
 
+use super::erosion::Erosion;
 use crate::contact::ContactSet;
 use crate::element::plastic::PlasticState;
-use crate::element::{evaluate_state, failure, Dissipation, ElementOut};
+use crate::element::{evaluate_state, Dissipation, ElementOut};
 use crate::error::Result;
 use crate::geometry::QuadGeometry;
 use crate::model::Model;
@@ -73,17 +74,8 @@ struct CpuState {
     gravity_work: f64,
     #[serde(default)]
     gravity_after: f64,
-    /// Per element: whether it failed and eroded (empty without failure).
-    #[serde(default)]
-    eroded: Vec<bool>,
-    /// Johnson-Cook damage of every element (empty without Johnson-Cook damage).
-    #[serde(default)]
-    damage: Vec<f64>,
-    /// Elements eroded so far, and the strain and stored hourglass energy they held then.
-    #[serde(default)]
-    eroded_count: u64,
-    #[serde(default)]
-    eroded_energy: f64,
+    /// Failed elements, damage and the energy eroded with them (empty without failure).
+    erosion: Erosion,
     t: f64,
     n: u64,
     dt_prev: f64,
@@ -155,18 +147,7 @@ impl CpuSolver {
             damping_after: 0.0,
             gravity_work: 0.0,
             gravity_after: 0.0,
-            eroded: if plan.has(Stage::Failure) {
-                vec![false; ne]
-            } else {
-                Vec::new()
-            },
-            damage: if plan.has(Stage::Failure) && model.has_damage() {
-                vec![0.0; ne]
-            } else {
-                Vec::new()
-            },
-            eroded_count: 0,
-            eroded_energy: 0.0,
+            erosion: Erosion::new(&model, ne, plan.has(Stage::Failure)),
             t: 0.0,
             n: 0,
             dt_prev: 0.0,
@@ -213,9 +194,7 @@ impl CpuSolver {
             && s.pressure_impulse.len() == self.pressure.len()
             && s.pressure_v_old.len() == self.pressure.len()
             && s.damping_v_old.len() == self.s.damping_v_old.len()
-            && s.eroded.len() == self.s.eroded.len()
-            && s.damage.len() == self.s.damage.len()
-            && s.eroded_count as usize <= s.eroded.len()
+            && s.erosion.fits(&self.s.erosion)
             && s.contact.is_some() == self.s.contact.is_some()
             && (self.s.dissipation.is_empty() || self.s.dissipation.len() == ne);
         if !fits {
@@ -245,17 +224,17 @@ impl CpuSolver {
     /// Per element, whether it failed and eroded (empty for a model without failure): the
     /// surface that contact sees changes where one did.
     pub fn eroded(&self) -> &[bool] {
-        &self.s.eroded
+        &self.s.erosion.eroded
     }
 
     /// Elements eroded so far (a count that grows when elements erode during a batch).
     pub fn eroded_count(&self) -> u64 {
-        self.s.eroded_count
+        self.s.erosion.count
     }
 
     /// Johnson-Cook damage of every element (empty without Johnson-Cook damage).
     pub fn damage(&self) -> &[f64] {
-        &self.s.damage
+        &self.s.erosion.damage
     }
 
     /// The contact state, if the model has contact.
@@ -285,7 +264,7 @@ impl CpuSolver {
     pub fn stable_step(&self) -> (f64, usize) {
         let mut best = (f64::INFINITY, 0);
         for e in 0..self.model.element_count() {
-            if self.s.eroded.get(e) == Some(&true) {
+            if self.s.erosion.is_eroded(e) {
                 continue;
             }
             let out = self.evaluate(e, &Dissipation::default(), 0.0);
@@ -351,30 +330,6 @@ impl CpuSolver {
         }));
     }
 
-    /// Whether element `e`, evaluated as `out`, fails (its Johnson-Cook damage updated).
-    fn fails(&mut self, e: usize, out: &ElementOut) -> bool {
-        let Some(c) = self.model.params(e).failure else {
-            return false;
-        };
-        let alpha_old = self.s.plastic.get(e).map_or(0.0, |p| p.alpha);
-        let damage = self.s.damage.get(e).copied().unwrap_or(0.0);
-        let check = failure::check(
-            &c,
-            &out.stress,
-            &out.def_grad,
-            out.hoop_stretch,
-            alpha_old,
-            out.plastic.alpha,
-            self.s.dt_prev,
-            damage,
-            0.0,
-        );
-        if let Some(d) = self.s.damage.get_mut(e) {
-            *d = check.damage;
-        }
-        check.failed
-    }
-
     fn element_stage(&mut self, need_energy: bool) -> std::result::Result<ElementStage, String> {
         for f in &mut self.s.f {
             *f = [0.0; 2];
@@ -387,9 +342,9 @@ impl CpuSolver {
         };
         let keep = !self.s.dissipation.is_empty();
         let plastic = !self.s.plastic.is_empty();
-        let failure = !self.s.eroded.is_empty();
+        let failure = self.s.erosion.active();
         for e in 0..self.model.element_count() {
-            if failure && self.s.eroded[e] {
+            if failure && self.s.erosion.is_eroded(e) {
                 continue;
             }
             let q = self.model.quads[e];
@@ -399,7 +354,12 @@ impl CpuSolver {
                 Dissipation::default()
             };
             let out = self.evaluate(e, &prev, self.s.dt_prev);
-            if failure && self.fails(e, &out) {
+            if failure && {
+                let alpha_old = self.s.plastic.get(e).map_or(0.0, |p| p.alpha);
+                self.s
+                    .erosion
+                    .fails(&self.model, e, &out, alpha_old, self.s.dt_prev)
+            } {
                 // Eroded at once: no force, no stable step from now on. Its strain and stored
                 // hourglass energy leave with it, less the work its forces f_n would have done
                 // over the half step before t_n: the energy of the interval pairs f_{n-1} and
@@ -420,9 +380,9 @@ impl CpuSolver {
                     self.s.plastic[e] = out.plastic;
                     self.s.plastic_work += out.plastic_work;
                 }
-                self.s.eroded[e] = true;
-                self.s.eroded_count += 1;
-                self.s.eroded_energy += out.strain_energy + out.hourglass_stored + half_work;
+                self.s
+                    .erosion
+                    .erode(e, out.strain_energy + out.hourglass_stored + half_work);
                 continue;
             }
             if out.min_corner.is_nan() || out.min_corner <= 0.0 {
@@ -479,7 +439,7 @@ impl CpuSolver {
             Ok(st) => st,
             Err(msg) => return self.fail(events, msg),
         };
-        if st.dt_min == f64::INFINITY && self.s.eroded_count > 0 && self.s.n > 0 {
+        if st.dt_min == f64::INFINITY && self.s.erosion.count > 0 && self.s.n > 0 {
             // Every element eroded: free masses, which keep the last step.
             st.dt_min = self.s.dt_prev / s.time_step_scale;
         }
@@ -739,8 +699,8 @@ impl CpuSolver {
                     .map(|(a, b)| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])])
                     .collect(),
                 plastic: self.s.plastic.clone(),
-                eroded: self.s.eroded.clone(),
-                damage: self.s.damage.clone(),
+                eroded: self.s.erosion.eroded.clone(),
+                damage: self.s.erosion.damage.clone(),
             }));
             self.s.clock.took_snapshot(&s, self.s.t, self.s.dt_prev);
         }
@@ -773,8 +733,8 @@ impl CpuSolver {
                 hourglass: st.hourglass_stored + self.s.hourglass_work,
                 viscous: self.s.bulk_work - (self.s.damping_work - self.s.damping_after),
                 plastic: self.s.plastic_work,
-                eroded_elements: self.s.eroded_count,
-                eroded_energy: self.s.eroded_energy,
+                eroded_elements: self.s.erosion.count,
+                eroded_energy: self.s.erosion.energy,
                 external: self.s.external_work - reaction_after
                     + (self.s.pressure_work - self.s.pressure_after)
                     + (self.s.gravity_work - self.s.gravity_after),
@@ -831,7 +791,7 @@ impl Solver for CpuSolver {
             contact_unconverged: s.unconverged,
             contact_residual_max: s.residual_max,
             contact_penalty_bounded: self.s.contact.as_ref().map_or(0, |c| c.penalty_bounded()),
-            eroded_elements: self.s.eroded_count,
+            eroded_elements: self.s.erosion.count,
             ..Default::default()
         }
     }

@@ -12,6 +12,7 @@
 //! 5. u_{n+1} = u_n + dt^{n+1/2} v^{n+1/2}, t_{n+1} = t_n + dt^{n+1/2}.
 
 pub mod cpu;
+pub mod erosion;
 
 use crate::element::plastic::PlasticState;
 use crate::error::Result;
