@@ -16,6 +16,9 @@
 //! - [`failure`]: material failure and erosion: a single element eroding at the step its
 //!   plastic strain reaches the limit, Johnson-Cook damage at zero triaxiality against its closed
 //!   form, the energy audit with `eroded_energy`, free nodes, the plan, the outputs;
+//! - [`erosion_contact`]: eroding contact: the masked candidate edges against the boundary of
+//!   the remaining elements, two-body, group, self-contact and wall surfaces following erosion, a
+//!   projectile perforating a plate, free nodes stopping on a wall;
 //! - [`friction`]: Coulomb friction with Lagrange contact: a block sliding on a floor and on a
 //!   clamped block decelerates at mu g, its friction work and force;
 //! - [`gravity`]: gravity as a body force: exact free fall and its work, a block resting on a wall;
@@ -77,6 +80,8 @@ mod checkpoint_checks;
 mod contact;
 #[path = "core/energy.rs"]
 mod energy;
+#[path = "core/erosion_contact.rs"]
+mod erosion_contact;
 #[path = "core/failure.rs"]
 mod failure;
 #[path = "core/friction.rs"]

@@ -1,12 +1,14 @@
 //! Building a [`ContactSet`] from a model: the passes of each `[[contact]]` table (a pair's one or
-//! two directions, or a group's one symmetric pass), the walls, the local nodes and masses.
+//! two directions, or a group's one symmetric pass), the walls, the local nodes and masses; and
+//! the same passes and walls again on the surfaces left after erosion ([`rebuild`], called by
+//! [`super::erosion`]), in the local numbering of the first build.
 
 use std::collections::BTreeMap;
 
 use super::report::Interface;
 use super::{ContactSet, Law, Pass, Wall};
 use crate::geometry::quad_geometry;
-use crate::model::surface::{self, Surface};
+use crate::model::surface::{self, EdgeCandidates, Surface};
 use crate::model::Model;
 use crate::scene::{Contact, PenaltyForm};
 
@@ -30,7 +32,14 @@ fn element_area(model: &Model, e: u32) -> f64 {
 /// Surfaces and local node numbering while the set is built.
 struct Builder<'m> {
     model: &'m Model,
+    /// Per global element, whether it eroded (empty: none has).
+    eroded: &'m [bool],
+    /// The surfaces of the bodies now (those of `initial` while nothing has eroded).
     surfaces: Vec<Option<Surface>>,
+    /// The surfaces of the mesh as meshed.
+    initial: Vec<Option<Surface>>,
+    /// The candidate edges of the bodies that can erode, when first needed.
+    candidates: Vec<Option<EdgeCandidates>>,
     local: Vec<u32>,
     nodes: Vec<u32>,
     min_length: f64,
@@ -38,12 +47,96 @@ struct Builder<'m> {
     step: Option<f64>,
 }
 
-impl Builder<'_> {
-    fn surface(&mut self, b: usize) -> Surface {
+impl<'m> Builder<'m> {
+    fn new(model: &'m Model, eroded: &'m [bool]) -> Self {
+        let nb = model.bodies.len();
+        Builder {
+            model,
+            eroded,
+            surfaces: vec![None; nb],
+            initial: vec![None; nb],
+            candidates: vec![None; nb],
+            local: vec![u32::MAX; model.node_count()],
+            nodes: Vec::new(),
+            min_length: f64::INFINITY,
+            step: None,
+        }
+    }
+
+    /// Whether body `b`'s elements can fail (its surface follows erosion).
+    fn erodible(&self, b: usize) -> bool {
+        self.model.bodies[b].params.failure.is_some()
+    }
+
+    /// Body `b`'s candidate edges (an erodible body).
+    fn candidates(&mut self, b: usize) -> &EdgeCandidates {
         let model = self.model;
-        self.surfaces[b]
+        self.candidates[b].get_or_insert_with(|| EdgeCandidates::of_body(model, b))
+    }
+
+    /// Body `b`'s surface as meshed.
+    fn initial_surface(&mut self, b: usize) -> Surface {
+        let model = self.model;
+        self.initial[b]
             .get_or_insert_with(|| Surface::of_body(model, b))
             .clone()
+    }
+
+    /// Body `b`'s surface now: as meshed, or the exposed candidate edges after erosion.
+    fn surface(&mut self, b: usize) -> Surface {
+        if self.eroded.is_empty() || !self.erodible(b) {
+            return self.initial_surface(b);
+        }
+        if let Some(s) = &self.surfaces[b] {
+            return s.clone();
+        }
+        let eroded = self.eroded;
+        let s = self.candidates(b).surface(eroded);
+        self.surfaces[b] = Some(s.clone());
+        s
+    }
+
+    /// Body `b`'s free nodes (of eroded elements only), within the nodes of `only` (global node
+    /// pairs) if given.
+    fn free_nodes(&mut self, b: usize, only: Option<&[[u32; 2]]>) -> Vec<u32> {
+        if self.eroded.is_empty() || !self.erodible(b) {
+            return Vec::new();
+        }
+        let eroded = self.eroded;
+        let mut free = self.candidates(b).free_nodes(eroded);
+        if let Some(edges) = only {
+            let set: std::collections::HashSet<u32> = edges.iter().flatten().copied().collect();
+            free.retain(|g| set.contains(g));
+        }
+        free
+    }
+
+    /// Adds every node of the erodible bodies of the contacts and walls to the local numbering
+    /// (after the surface nodes, whose numbers stay), and every candidate edge to the shortest
+    /// segment: the surfaces erosion exposes need no new local node, and the margin holds.
+    fn erodible_nodes(&mut self) {
+        let model = self.model;
+        let mut bodies: Vec<usize> = model
+            .contacts
+            .iter()
+            .flat_map(|c| c.bodies.iter().copied())
+            .chain(model.walls.iter().flat_map(|w| w.bodies.iter().copied()))
+            .filter(|&b| self.erodible(b))
+            .collect();
+        bodies.sort_unstable();
+        bodies.dedup();
+        for b in bodies {
+            for g in model.bodies[b].nodes.clone() {
+                self.add(g as u32);
+            }
+            let shortest = self
+                .candidates(b)
+                .edges
+                .iter()
+                .map(|s| surface::length(model, s))
+                .fold(f64::INFINITY, f64::min);
+            self.min_length = self.min_length.min(shortest);
+        }
     }
 
     /// The local index of global node `g`.
@@ -56,9 +149,19 @@ impl Builder<'_> {
     }
 
     /// Body `b`'s surface, or with `only` (global node pairs, either direction) the segments
-    /// among them and their nodes (a contact limited to named faces).
-    fn surface_of(&mut self, b: usize, only: Option<&[[u32; 2]]>) -> Surface {
+    /// among them and their nodes (a contact limited to named faces), with its free nodes.
+    fn surface_of(&mut self, b: usize, only: Option<&[[u32; 2]]>) -> (Surface, Vec<u32>) {
         let s = self.surface(b);
+        let free = self.free_nodes(b, only);
+        match only {
+            Some(edges) => (s.restricted(edges), free),
+            None => (s, free),
+        }
+    }
+
+    /// Body `b`'s surface as meshed, or the part of it on `only`.
+    fn initial_of(&mut self, b: usize, only: Option<&[[u32; 2]]>) -> Surface {
+        let s = self.initial_surface(b);
         match only {
             Some(edges) => s.restricted(edges),
             None => s,
@@ -100,9 +203,9 @@ impl Builder<'_> {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Adds the nodes of `ss` (body `b`'s surface) to `p` as slaves.
-    fn slaves(&mut self, p: &mut Pass, b: usize, ss: &Surface) {
-        for (&g, [pg, ng]) in ss.nodes.iter().zip(surface_neighbours(ss)) {
+    /// Adds the nodes of `ss` (body `b`'s surface) and its free nodes `free` to `p` as slaves.
+    fn slaves(&mut self, p: &mut Pass, b: usize, ss: &Surface, free: &[u32]) {
+        for (g, [pg, ng]) in side_nodes(ss, free) {
             let s = self.add(g);
             let nb = [self.add(pg), self.add(ng)];
             p.slaves.push(s);
@@ -172,9 +275,10 @@ impl Builder<'_> {
             let mut p = empty(true);
             let mut slave_mass = f64::INFINITY;
             for &b in &c.bodies {
-                let ss = self.surface(b);
-                slave_mass = slave_mass.min(self.min_mass(&ss));
-                self.slaves(&mut p, b, &ss);
+                let (ss, free) = self.surface_of(b, None);
+                let initial = self.initial_surface(b);
+                slave_mass = slave_mass.min(self.min_mass(&initial));
+                self.slaves(&mut p, b, &ss, &free);
             }
             for &b in &c.bodies {
                 let ms = self.surface(b);
@@ -196,6 +300,17 @@ impl Builder<'_> {
             self.surface_of(first, faces[0].as_deref()),
             self.surface_of(second, faces[1].as_deref()),
         ];
+        // The mass form's slave mass: of the surfaces as meshed, whatever erodes.
+        let initial_mass = [
+            {
+                let s = self.initial_of(first, faces[0].as_deref());
+                self.min_mass(&s)
+            },
+            {
+                let s = self.initial_of(second, faces[1].as_deref());
+                self.min_mass(&s)
+            },
+        ];
         let mut dirs = vec![(first, second, 0, 1, true)];
         if c.two_pass {
             dirs.push((second, first, 1, 0, false));
@@ -204,9 +319,9 @@ impl Builder<'_> {
         let share = if c.two_pass { 0.5 } else { 1.0 };
         for (slave, master, ks, km, slave_is_first) in dirs {
             let mut p = empty(slave_is_first);
-            let slave_mass = self.min_mass(&surf[ks]);
-            self.masters(&mut p, master, &surf[km], share, spring, slave_mass);
-            self.slaves(&mut p, slave, &surf[ks]);
+            let slave_mass = initial_mass[ks];
+            self.masters(&mut p, master, &surf[km].0, share, spring, slave_mass);
+            self.slaves(&mut p, slave, &surf[ks].0, &surf[ks].1);
             passes.push(p);
         }
     }
@@ -222,12 +337,24 @@ impl Builder<'_> {
         };
         let mut neighbours = Vec::new();
         for &b in &w.bodies {
-            let s = self.surface(b);
-            for &g in &s.nodes {
-                // The node's stiffest adjacent boundary segment (modulus form), or its mass.
+            let (s, free) = self.surface_of(b, None);
+            let mut adjacent: BTreeMap<u32, Vec<surface::Segment>> = BTreeMap::new();
+            for seg in &s.segments {
+                for g in seg.nodes {
+                    adjacent.entry(g).or_default().push(*seg);
+                }
+            }
+            let side = side_nodes(&s, &free);
+            for &(g, _) in &side {
+                // The node's stiffest adjacent boundary segment (modulus form), or its mass; a
+                // free node's, of the edges of its (eroded) elements.
                 let mut k = 0.0f64;
                 let m = self.model.mass[g as usize];
-                for seg in s.segments.iter().filter(|seg| seg.nodes.contains(&g)) {
+                let segs = match adjacent.get(&g) {
+                    Some(segs) => segs.clone(),
+                    None => self.element_edges(b, g),
+                };
+                for seg in &segs {
                     let l = surface::length(self.model, seg);
                     self.min_length = self.min_length.min(l);
                     k = k.max(self.stiffness(spring, b, seg.element, l, m, f64::INFINITY));
@@ -237,7 +364,7 @@ impl Builder<'_> {
                 stiffness.push(k);
             }
             // (After the nodes, so that the local numbering stays that of the nodes.)
-            for nb in surface_neighbours(&s) {
+            for (_, nb) in side {
                 neighbours.push(nb.map(|g| self.add(g)));
             }
         }
@@ -260,6 +387,28 @@ impl Builder<'_> {
     }
 }
 
+impl Builder<'_> {
+    /// The edges at node `g` of its elements in body `b` (an erodible body's candidates).
+    fn element_edges(&mut self, b: usize, g: u32) -> Vec<surface::Segment> {
+        let model = self.model;
+        let cand = self.candidates(b);
+        let mut out = Vec::new();
+        for &e in cand.elements_of(g) {
+            let q = model.quads[e as usize];
+            for a in 0..4 {
+                let (i, j) = (q[a], q[(a + 1) % 4]);
+                if i != j && (i == g || j == g) {
+                    out.push(surface::Segment {
+                        nodes: [i, j],
+                        element: e,
+                    });
+                }
+            }
+        }
+        out
+    }
+}
+
 impl Law {
     /// The law of a contact's or wall's keys.
     fn new(friction: f64, friction_stiffness: f64, form: PenaltyForm, augmentation: f64) -> Self {
@@ -278,14 +427,7 @@ impl ContactSet {
         if !model.has_contact() {
             return None;
         }
-        let mut bld = Builder {
-            model,
-            surfaces: vec![None; model.bodies.len()],
-            local: vec![u32::MAX; model.node_count()],
-            nodes: Vec::new(),
-            min_length: f64::INFINITY,
-            step: None,
-        };
+        let mut bld = Builder::new(model, &[]);
         let mut interfaces = Vec::new();
         let mut passes = Vec::new();
         let mut walls = Vec::new();
@@ -301,6 +443,9 @@ impl ContactSet {
             let iface = interfaces.len();
             interfaces.push(Interface::new(&w.name));
             walls.push(bld.wall(w, iface));
+        }
+        if model.has_failure() {
+            bld.erodible_nodes();
         }
         let Builder {
             nodes, min_length, ..
@@ -368,6 +513,53 @@ impl ContactSet {
         set.penalty_step = set.compute_penalty_step();
         Some(set)
     }
+}
+
+/// The passes and walls of `model` on the surfaces left where `eroded` (per global element) have
+/// eroded, in the local numbering `nodes` of the first build ([`ContactSet::new`], which holds
+/// every node of an erodible body); `None` if they need a node outside it.
+pub(super) fn rebuild(
+    model: &Model,
+    eroded: &[bool],
+    nodes: &[u32],
+) -> Option<(Vec<Pass>, Vec<Wall>)> {
+    let mut bld = Builder::new(model, eroded);
+    for (l, &g) in nodes.iter().enumerate() {
+        bld.local[g as usize] = l as u32;
+    }
+    bld.nodes = nodes.to_vec();
+    let mut passes = Vec::new();
+    for (iface, c) in model.contacts.iter().enumerate() {
+        bld.contact(c, iface, &mut passes);
+    }
+    for p in &mut passes {
+        p.link_neighbours();
+    }
+    let walls = model
+        .walls
+        .iter()
+        .enumerate()
+        .map(|(k, w)| bld.wall(w, model.contacts.len() + k))
+        .collect();
+    (bld.nodes.len() == nodes.len()).then_some((passes, walls))
+}
+
+/// The nodes of a side of a contact: those of `ss` and the free nodes `free`, ascending, each
+/// with its neighbours along the surface (previous, next; global indices; the node itself where
+/// it has none, as a free node).
+fn side_nodes(ss: &Surface, free: &[u32]) -> Vec<(u32, [u32; 2])> {
+    let mut out: Vec<(u32, [u32; 2])> = ss
+        .nodes
+        .iter()
+        .copied()
+        .zip(surface_neighbours(ss))
+        .collect();
+    if !free.is_empty() {
+        out.extend(free.iter().map(|&g| (g, [g, g])));
+        out.sort_by_key(|x| x.0);
+        out.dedup_by_key(|x| x.0);
+    }
+    out
 }
 
 /// Each node of `ss` (in its order): its neighbours along the surface (previous, next; global

@@ -17,6 +17,8 @@
 //!   warm start, active-set re-check) and the bounded penalty impulse with its stable step.
 //! - [`report`]: what the history records per `[[contact]]` table or wall.
 //! - [`overlap`]: nodes behind a surface at t = 0, moved onto it before the run.
+//! - [`erosion`]: the surfaces following eroded elements (exposed edges join, eroded ones leave,
+//!   free nodes stay slaves), and how the GPU should mirror it.
 //! - [`tables`]: the same contact set as flat tables for the GPU kernel.
 //!
 //! Passes: a contact between two bodies has one pass per direction (slave nodes of one body
@@ -29,6 +31,7 @@
 
 pub mod broad;
 mod build;
+pub mod erosion;
 pub mod narrow;
 pub mod overlap;
 pub mod report;

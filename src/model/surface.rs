@@ -2,6 +2,13 @@
 //! nodes, on which the pressure loads act ([`super::PressureLoad`]) and the contacts are built
 //! ([`crate::contact`]). Computed once on the CPU; the GPU kernels receive the result as the
 //! pressure loads' nodal forces and the contact tables ([`crate::contact::Tables`]).
+//!
+//! A body whose elements can fail has a surface that changes as they erode: [`EdgeCandidates`]
+//! holds every edge of its elements once, in a fixed order, with the element across it, so that
+//! the surface at any time is that list under a mask (an edge is exposed when its element
+//! remains and the one across it does not), the form a GPU twin keeps
+//! ([`crate::contact::erosion`] says how). [`Surface::of_remaining`] is the same surface computed
+//! from scratch, against which it is tested.
 
 use super::Model;
 
@@ -45,9 +52,19 @@ impl Surface {
 
     /// Extracts the surface of body `body`: the edges used by exactly one of its elements.
     pub fn of_body(model: &Model, body: usize) -> Surface {
+        Surface::of_remaining(model, body, &[])
+    }
+
+    /// The surface of body `body`'s elements that have not eroded (`eroded`: per global
+    /// element; empty, or shorter than the elements, for none), from scratch: the edges used by
+    /// exactly one of them.
+    pub fn of_remaining(model: &Model, body: usize, eroded: &[bool]) -> Surface {
         let b = &model.bodies[body];
         let mut edges: Vec<([u32; 2], [u32; 2], u32)> = Vec::new();
         for e in b.elements.clone() {
+            if eroded.get(e) == Some(&true) {
+                continue;
+            }
             let q = model.quads[e];
             for a in 0..4 {
                 let (i, j) = (q[a], q[(a + 1) % 4]);
@@ -83,6 +100,150 @@ impl Surface {
             nodes,
             segments,
         }
+    }
+}
+
+/// No element across an edge (a boundary edge of the mesh), in [`EdgeCandidates::across`].
+pub const NONE: u32 = u32::MAX;
+
+/// Every edge of a body's elements, once per element that has it: the fixed candidate list of
+/// its surface while its elements erode ([`EdgeCandidates::exposed`] is the mask).
+#[derive(Debug, Clone)]
+pub struct EdgeCandidates {
+    /// The body.
+    pub body: usize,
+    /// Every element edge, oriented as in its element (the element on its left), sorted by
+    /// element and nodes as [`Surface::segments`]; the collapsed side of a triangle left out.
+    pub edges: Vec<Segment>,
+    /// The element across each edge ([`NONE`]: none, an edge of the mesh's boundary).
+    pub across: Vec<u32>,
+    /// Per node of the body (from `nodes.start`): the range of its elements in `node_elements`.
+    node_start: Vec<u32>,
+    /// The elements of each node, node after node.
+    node_elements: Vec<u32>,
+    /// The body's first global node.
+    first_node: u32,
+}
+
+impl EdgeCandidates {
+    /// The candidate edges of body `body` of `model`.
+    pub fn of_body(model: &Model, body: usize) -> EdgeCandidates {
+        let b = &model.bodies[body];
+        let mut edges: Vec<([u32; 2], Segment)> = Vec::new();
+        let nn = b.nodes.len();
+        let mut count = vec![0u32; nn + 1];
+        for e in b.elements.clone() {
+            let q = model.quads[e];
+            let mut seen: Vec<u32> = Vec::with_capacity(4);
+            for a in 0..4 {
+                let (i, j) = (q[a], q[(a + 1) % 4]);
+                if !seen.contains(&i) {
+                    seen.push(i);
+                    count[i as usize - b.nodes.start + 1] += 1;
+                }
+                if i == j {
+                    continue;
+                }
+                let seg = Segment {
+                    nodes: [i, j],
+                    element: e as u32,
+                };
+                edges.push(([i.min(j), i.max(j)], seg));
+            }
+        }
+        // Elements by node (compressed rows).
+        for k in 0..nn {
+            count[k + 1] += count[k];
+        }
+        let node_start = count.clone();
+        let mut node_elements = vec![0u32; count[nn] as usize];
+        let mut fill = count;
+        for e in b.elements.clone() {
+            let q = model.quads[e];
+            let mut seen: Vec<u32> = Vec::with_capacity(4);
+            for &i in &q {
+                if !seen.contains(&i) {
+                    seen.push(i);
+                    let k = i as usize - b.nodes.start;
+                    node_elements[fill[k] as usize] = e as u32;
+                    fill[k] += 1;
+                }
+            }
+        }
+        // The element across each edge: the other element with the same node pair.
+        edges.sort_by_key(|x| (x.0, x.1.element));
+        let mut across = vec![NONE; edges.len()];
+        let mut k = 0;
+        while k < edges.len() {
+            let mut m = k + 1;
+            while m < edges.len() && edges[m].0 == edges[k].0 {
+                m += 1;
+            }
+            if m - k == 2 {
+                across[k] = edges[k + 1].1.element;
+                across[k + 1] = edges[k].1.element;
+            }
+            k = m;
+        }
+        let mut order: Vec<usize> = (0..edges.len()).collect();
+        order.sort_by_key(|&i| (edges[i].1.element, edges[i].1.nodes));
+        EdgeCandidates {
+            body,
+            edges: order.iter().map(|&i| edges[i].1).collect(),
+            across: order.iter().map(|&i| across[i]).collect(),
+            node_start,
+            node_elements,
+            first_node: b.nodes.start as u32,
+        }
+    }
+
+    /// The mask: whether candidate `k` lies on the surface when the elements flagged in
+    /// `eroded` (per global element) have eroded: its element remains and the one across it
+    /// does not (or there is none).
+    #[inline]
+    pub fn exposed(&self, k: usize, eroded: &[bool]) -> bool {
+        let gone = |e: u32| eroded.get(e as usize) == Some(&true);
+        let a = self.across[k];
+        !gone(self.edges[k].element) && (a == NONE || gone(a))
+    }
+
+    /// The surface under the mask: the exposed candidates in their order, and their nodes.
+    pub fn surface(&self, eroded: &[bool]) -> Surface {
+        let segments: Vec<Segment> = (0..self.edges.len())
+            .filter(|&k| self.exposed(k, eroded))
+            .map(|k| self.edges[k])
+            .collect();
+        let mut nodes: Vec<u32> = segments.iter().flat_map(|s| s.nodes).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        Surface {
+            body: self.body,
+            nodes,
+            segments,
+        }
+    }
+
+    /// The elements of global node `g` (none where `g` is not a node of the body).
+    pub fn elements_of(&self, g: u32) -> &[u32] {
+        let Some(k) = g.checked_sub(self.first_node).map(|k| k as usize) else {
+            return &[];
+        };
+        match (self.node_start.get(k), self.node_start.get(k + 1)) {
+            (Some(&a), Some(&b)) => &self.node_elements[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+
+    /// The body's free nodes (ascending): nodes of elements that have all eroded, left as free
+    /// masses.
+    pub fn free_nodes(&self, eroded: &[bool]) -> Vec<u32> {
+        (0..self.node_start.len() - 1)
+            .map(|k| self.first_node + k as u32)
+            .filter(|&g| {
+                let els = self.elements_of(g);
+                !els.is_empty() && els.iter().all(|&e| eroded.get(e as usize) == Some(&true))
+            })
+            .collect()
     }
 }
 

@@ -435,10 +435,17 @@ impl CpuSolver {
         let at_end = Clock::at_end(&s, self.s.t, self.s.dt_prev);
 
         // 1. Element stage.
+        let eroded_before = self.s.erosion.count;
         let mut st = match self.element_stage(sample_due) {
             Ok(st) => st,
             Err(msg) => return self.fail(events, msg),
         };
+        if self.s.erosion.count != eroded_before {
+            // Eroding contact: the surfaces follow, and this step's contact searches again.
+            if let Some(c) = self.s.contact.as_mut() {
+                c.follow_erosion(&self.model, &self.s.erosion.eroded);
+            }
+        }
         if st.dt_min == f64::INFINITY && self.s.erosion.count > 0 && self.s.n > 0 {
             // Every element eroded: free masses, which keep the last step.
             st.dt_min = self.s.dt_prev / s.time_step_scale;
