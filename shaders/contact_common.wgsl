@@ -128,7 +128,9 @@ struct ContactCtl {
     sweeps_total: u32,        // sweeps over the run (steps with Lagrange constraints)
     sweeps_max: u32,
     solve_steps: u32,         // steps with Lagrange constraints
-    unconverged: u32,         // solves that stopped at max_sweeps
+    unconverged: u32,         // steps whose last solve stopped at max_sweeps (above the tolerance)
+    residual: u32,            // f32 bits: this step's residual, the largest gap change of its last sweep
+    residual_max: u32,        // f32 bits: the largest residual of a step over the run
     // Per-colour path: the largest gap change of each sweep (f32 bits; 0: the sweep did not run),
     // and the constraints each active-set re-check added.
     change: array<atomic<u32>, MAX_SWEEP_SLOTS>,

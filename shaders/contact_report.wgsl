@@ -356,15 +356,25 @@ fn report_end_step(l: u32) {
     if (atomicLoad(&cc.lagrange) > 0u) {
         var s = cc.sweeps;
         if (cc.p.multi != 0u) {
+            // The sweeps that ran, and the change of the last of them: the step's residual.
             s = 0u;
+            var last = 0u;
             for (var q = 0u; q < MAX_SWEEP_SLOTS; q++) {
-                s += select(0u, 1u, atomicLoad(&cc.change[q]) != 0u);
+                let c = atomicLoad(&cc.change[q]);
+                if (c != 0u) {
+                    s += 1u;
+                    last = c;
+                }
             }
-            let last = atomicLoad(&cc.change[cc.p.max_sweeps - 1u]);
-            if (last != 0u && bitcast<f32>(last) > cc.p.tolerance) {
-                cc.unconverged += 1u;
-            }
+            cc.residual = last;
         }
+        // A step whose last solve stopped at max_sweeps, still above the tolerance: on both
+        // paths counted once per step, as on the CPU reference.
+        if (bitcast<f32>(cc.residual) > cc.p.tolerance) {
+            cc.unconverged += 1u;
+        }
+        // Non-negative floats order as their bits.
+        cc.residual_max = max(cc.residual_max, cc.residual);
         cc.sweeps = s;
         cc.sweeps_total += s;
         cc.sweeps_max = max(cc.sweeps_max, s);

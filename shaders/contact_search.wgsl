@@ -133,6 +133,7 @@ fn plan_step() {
     }
     atomicStore(&cc.lagrange, 0u);
     cc.sweeps = 0u;
+    cc.residual = 0u;
     for (var q = 0u; q < MAX_SWEEP_SLOTS; q++) {
         atomicStore(&cc.change[q], 0u);
     }

@@ -333,7 +333,6 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
     var taken = 0u;
     var run = 0u;
     var last = 3.0e38;
-    var converged = false;
     for (var sweep = 0u; sweep < cc.p.max_sweeps; sweep++) {
         // (At the start of a run, before sweep 0 and the first sweep after a restart, the values
         // kept would not be used: the next factor is 0 as well, and its call keeps them again.)
@@ -373,12 +372,13 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
         }
         last = largest;
         if (!(largest > cc.p.tolerance)) {
-            converged = true;
             break;
         }
     }
-    if (!converged && l == 0u) {
-        cc.unconverged += 1u;
+    if (l == 0u) {
+        // The step's residual is its last solve's (a re-check's sweeps overwrite it); above the
+        // tolerance when that solve stopped at max_sweeps (`report_end` counts the step).
+        cc.residual = bitcast<u32>(last);
     }
     unpack(l);
     return taken;

@@ -56,8 +56,8 @@ pub struct Summary {
     /// on the GPU.
     pub contact_unconverged: u64,
     /// Lagrange contact: the largest residual of a step, the largest change of a gap (or of a
-    /// tangential slip) in the step's last sweep over the search margin (0 without); `None`,
-    /// and no key in `summary.json`, where the backend does not measure it (the GPU, for now).
+    /// tangential slip) in the step's last sweep over the search margin (0 without), on both
+    /// backends (the GPU's in f32); `None` only in summaries written before the GPU measured it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact_residual_max: Option<f64>,
     /// Penalty contact: impulses bounded by the perfectly plastic impulse (constraint-steps

@@ -399,7 +399,7 @@ fn summary_now(
         contact_sweeps_mean: counters.contact_sweeps_mean,
         contact_sweeps_max: counters.contact_sweeps_max,
         contact_unconverged: counters.contact_unconverged,
-        contact_residual_max: (solver.backend() == "cpu").then_some(counters.contact_residual_max),
+        contact_residual_max: Some(counters.contact_residual_max),
         contact_penalty_bounded: counters.contact_penalty_bounded,
         failure: scene
             .materials

@@ -596,8 +596,11 @@ fn small_shipped_scenes_converge_in_every_contact_step() {
         let r = run(&scene, &model, &plan, &mut gpu, &out, None).expect("gpu run");
         let _ = std::fs::remove_dir_all(&out);
         let s = &r.summary;
+        let residual = s
+            .contact_residual_max
+            .expect("the GPU reports contact_residual_max");
         println!(
-            "{name}: {} steps, sweeps {:.1} mean {} max, {} unconverged",
+            "{name}: {} steps, sweeps {:.1} mean {} max, {} unconverged, residual up to {residual:.2e}",
             s.steps, s.contact_sweeps_mean, s.contact_sweeps_max, s.contact_unconverged
         );
         assert_eq!(s.status, "completed", "{name}: {}", s.message);
@@ -606,5 +609,68 @@ fn small_shipped_scenes_converge_in_every_contact_step() {
             "{name}: no Lagrange constraint"
         );
         assert_eq!(s.contact_unconverged, 0, "{name}");
+        assert!(
+            residual > 0.0 && residual <= ricochet::gpu::contact::solve::TOLERANCE,
+            "{name}: residual {residual:e} of the margin"
+        );
+    }
+}
+
+/// The GPU measures contact convergence as the CPU reference does (issue: contact that did not
+/// converge said aloud): `contact_residual_max` is the largest change of a gap in a step's last
+/// sweep over the search margin, and `contact_unconverged` counts the steps whose residual stayed
+/// above `gpu::contact::solve::TOLERANCE`, once per step, on every solve path: the one-workgroup
+/// solve with its re-checks inside or split apart, and the per-colour path (16 sweeps a round,
+/// not extrapolated, where the patch test's steps stop above the tolerance).
+#[test]
+fn gpu_contact_residual_is_measured_on_every_solve_path() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let name = "patch_test.toml";
+    let (scene, model, plan) = load(&asset(name), name);
+    let paths = [
+        ("one workgroup", Some(false), Some(false)),
+        ("split re-checks", Some(false), Some(true)),
+        ("per colour", Some(true), None),
+    ];
+    for (what, multi, split) in paths {
+        let options = ricochet::gpu::contact::ContactOptions {
+            multi,
+            split,
+            ..Default::default()
+        };
+        let mut gpu =
+            GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
+                .expect("gpu solver");
+        let out = std::env::temp_dir().join(format!(
+            "ricochet-gpu-residual-{}-{}",
+            std::process::id(),
+            what.replace(' ', "-")
+        ));
+        let r = run(&scene, &model, &plan, &mut gpu, &out, None).expect("gpu run");
+        let _ = std::fs::remove_dir_all(&out);
+        let s = &r.summary;
+        let residual = s.contact_residual_max.expect("contact_residual_max");
+        println!(
+            "patch test, {what}: {} steps, sweeps {:.1} mean {} max, {} unconverged, residual up to {residual:.2e}",
+            s.steps, s.contact_sweeps_mean, s.contact_sweeps_max, s.contact_unconverged
+        );
+        assert_eq!(s.status, "completed", "{what}: {}", s.message);
+        assert!(
+            residual > 0.0 && residual.is_finite(),
+            "{what}: {residual:e}"
+        );
+        assert!(
+            s.contact_unconverged <= s.steps,
+            "{what}: {} unconverged of {} steps",
+            s.contact_unconverged,
+            s.steps
+        );
+        assert_eq!(
+            s.contact_unconverged > 0,
+            residual > ricochet::gpu::contact::solve::TOLERANCE,
+            "{what}: {} steps above the tolerance, residual {residual:e}",
+            s.contact_unconverged
+        );
     }
 }

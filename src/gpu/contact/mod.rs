@@ -190,15 +190,20 @@ pub struct ContactCounters {
     pub sweeps_max: u32,
     pub solve_steps: u32,
     pub unconverged: u32,
+    /// f32 bits: the residual of this step (the largest change of a gap in its last sweep, m).
+    pub residual: u32,
+    /// f32 bits: the largest residual of a step so far (m).
+    pub residual_max: u32,
 }
 
 /// Bytes of WGSL `ContactParams`, at the start of `ContactCtl`.
 pub const PARAMS_SIZE: u64 = std::mem::size_of::<ContactParams>() as u64;
 /// Bytes of WGSL `ContactCtl`: the parameters, the counters, the per-sweep changes.
-pub const CTL_SIZE: u64 = PARAMS_SIZE + 64 + 4 * MAX_SWEEP_SLOTS as u64 + 16;
+pub const CTL_SIZE: u64 =
+    PARAMS_SIZE + std::mem::size_of::<ContactCounters>() as u64 + 4 * MAX_SWEEP_SLOTS as u64 + 16;
 
 const _: () = assert!(std::mem::size_of::<ContactParams>() == 208);
-const _: () = assert!(std::mem::size_of::<ContactCounters>() == 64);
+const _: () = assert!(std::mem::size_of::<ContactCounters>() == 72);
 
 /// What the stages record their dispatches with: the contact bind group (group 0; its dynamic
 /// offset selects an index entry), the indirect sizes and the parameters.

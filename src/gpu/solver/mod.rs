@@ -542,6 +542,8 @@ impl Solver for GpuSolver {
             out.contact_searches = k.searches as u64;
             out.contact_sweeps_max = k.sweeps_max as u64;
             out.contact_unconverged = k.unconverged as u64;
+            out.contact_residual_max = f64::from(f32::from_bits(k.residual_max))
+                / f64::from(c.params.margin).max(f64::MIN_POSITIVE);
             out.contact_penalty_bounded = k.bounded as u64;
             out.contact_sweeps_mean = if k.solve_steps > 0 {
                 k.sweeps_total as f64 / k.solve_steps as f64
