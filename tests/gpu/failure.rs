@@ -1,7 +1,8 @@
 //! Material failure and erosion on the GPU against the CPU reference (lavapipe in CI): a freely
 //! stretching block whose elements erode at a plastic-strain limit, and one whose elements erode
 //! by Johnson-Cook damage: the same elements erode, each count reached within one step of the
-//! CPU's, the energy balances with the eroded energy counted, two GPU runs give the same bits,
+//! CPU's, the energy balances with the eroded energy counted, two GPU runs give the same bits
+//! (and the reductions over many workgroups the same erosion),
 //! and a restart from a checkpoint taken after some elements eroded ends with the outputs of the
 //! run never stopped. A scene without failure compiles neither the check nor its buffers.
 
@@ -115,6 +116,26 @@ fn gpu_erosion_matches_the_cpu_reference_and_repeats_bit_for_bit() {
         let (gs2, gsnap2) = run_to_end(&mut again);
         assert_eq!(gs, gs2, "{failure}: two GPU runs differ");
         assert_eq!(gsnap, gsnap2, "{failure}: two GPU runs' snapshots differ");
+        // The reductions over many workgroups (the path of GPUs and of large models): the same
+        // elements erode at the same steps, the eroded energy summed in another fixed order.
+        let mut multi =
+            GpuSolver::with_reductions(ctx.clone(), &model, &plan, schedule(&scene), Some(false))
+                .expect("gpu");
+        assert!(multi.state().params.sum_groups > 0);
+        let (ms, msnap) = run_to_end(&mut multi);
+        assert_eq!(
+            msnap.last().unwrap().eroded,
+            *ge,
+            "{failure}: multi-level reductions"
+        );
+        for (m, g) in ms.iter().zip(&gs) {
+            assert_eq!(
+                m.eroded_elements, g.eroded_elements,
+                "{failure}: step {}",
+                g.step
+            );
+            assert!((m.eroded_energy - g.eroded_energy).abs() <= 1e-5 * cl.eroded_energy);
+        }
     }
 }
 
