@@ -4,7 +4,9 @@
 //! CPU's, the energy balances with the eroded energy counted, two GPU runs give the same bits
 //! (and the reductions over many workgroups the same erosion),
 //! and a restart from a checkpoint taken after some elements eroded ends with the outputs of the
-//! run never stopped. A scene without failure compiles neither the check nor its buffers.
+//! run never stopped; in neo-Hookean and linear elastic blocks the principal-strain and spall
+//! limits erode the CPU's elements. A scene without failure compiles neither the check nor its
+//! buffers.
 
 use super::*;
 
@@ -135,6 +137,63 @@ fn gpu_erosion_matches_the_cpu_reference_and_repeats_bit_for_bit() {
                 g.step
             );
             assert!((m.eroded_energy - g.eroded_energy).abs() <= 1e-5 * cl.eroded_energy);
+        }
+    }
+}
+
+/// The stretching block of an elastic material `model` (its yield keys removed) with `failure`.
+fn elastic_block(model: &str, failure: &str) -> String {
+    block(failure)
+        .replace("model = \"j2_plastic\"", &format!("model = \"{model}\""))
+        .lines()
+        .filter(|l| !l.starts_with("yield_stress") && !l.starts_with("hardening_modulus"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn gpu_principal_strain_and_spall_limits_erode_the_cpus_elements_in_elastic_bodies() {
+    // The elastic models' Cauchy stress and the principal strain (element.wgsl's linear elastic
+    // and neo-Hookean branches), which the plastic cases above do not reach.
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for (model, failure) in [
+        ("neo_hookean", "{ principal_strain = 0.004 }"),
+        ("linear_elastic", "{ tensile_pressure = 2.0e8 }"),
+        ("neo_hookean", "{ tensile_pressure = 2.0e8 }"),
+    ] {
+        let text = elastic_block(model, failure);
+        let (scene, m, plan) = load(&text, "block.toml");
+        let ne = m.element_count();
+        let mut cpu = CpuSolver::new(m.clone(), plan.clone(), schedule(&scene));
+        let (cs, csnap) = run_to_end(&mut cpu);
+        let mut gpu = GpuSolver::new(ctx.clone(), &m, &plan, schedule(&scene)).expect("gpu");
+        let (gs, gsnap) = run_to_end(&mut gpu);
+        let what = format!("{model} {failure}");
+        let (cl, gl) = (cs.last().unwrap(), gs.last().unwrap());
+        println!(
+            "{what}: {} of {ne} eroded on the CPU, {} on the GPU",
+            cl.eroded_elements, gl.eroded_elements
+        );
+        assert!(
+            cl.eroded_elements > 0 && (cl.eroded_elements as usize) < ne,
+            "{what}: {} of {ne} eroded on the CPU",
+            cl.eroded_elements
+        );
+        assert_eq!(
+            csnap.last().unwrap().eroded,
+            gsnap.last().unwrap().eroded,
+            "{what}: eroded elements, CPU then GPU"
+        );
+        for j in 0..cs.len() {
+            let lo = cs[j.saturating_sub(1)].eroded_elements;
+            let hi = cs[(j + 1).min(cs.len() - 1)].eroded_elements;
+            assert!(
+                (lo..=hi).contains(&gs[j].eroded_elements),
+                "{what}: step {}: {} eroded on the GPU, {lo}..{hi} on the CPU",
+                gs[j].step,
+                gs[j].eroded_elements
+            );
         }
     }
 }
