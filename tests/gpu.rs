@@ -1119,6 +1119,8 @@ mod contact;
 mod device;
 #[path = "gpu/end_time.rs"]
 mod end_time;
+#[path = "gpu/failure.rs"]
+mod failure;
 #[path = "gpu/fuzz.rs"]
 mod fuzz;
 #[path = "gpu/general.rs"]
