@@ -28,8 +28,9 @@ struct Params {
     gravity_y: f32,
     gravity_ramp: f32,    // s: linear ramp of gravity from 0 (0: none)
     one: f32,             // 1.0, unknown to the compiler (node.wgsl's compensated sum)
-    _p0: u32,
-    _p1: u32,
+    failure: u32,         // 1: elements may erode (element.wgsl's failure check); the eroded
+                          // count and energy in the words after the plastic work's
+    failure_at: u32,      // with failure: the erosion sums' first item in sample_src (after the plastic work's)
     _p2: u32,
 }
 

@@ -81,8 +81,12 @@ fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (flagged(atomicLoad(&ctrl.bad_element), 1u)) {
         return;
     }
-    let dt_min = sh_dt[0];
+    var dt_min = sh_dt[0];
     let at = sh_ix[0];
+    if (params.failure != 0u && dt_min >= 2.9e38 && ctrl.step > 0u) {
+        // Every element eroded (element.wgsl's ERODED_DT): free masses, which keep the last step.
+        dt_min = ctrl.dt_prev / params.scale;
+    }
     if (not_finite(dt_min) || !(dt_min > 0.0)) {
         fail(5u, at, dt_min);
         return;
@@ -157,8 +161,9 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     // (body b on lane b % RG, each lane in body order, then the tree: a fixed order).
     let nb = params.n_bodies;
     let base = (ctrl.rows % params.row_capacity) * params.row_stride;
-    // The plastic work (word 9) comes before the bodies' words in a plastic scene.
-    let bw = base + 9u + params.plastic;
+    // The plastic work (word 9) comes before the bodies' words in a plastic scene, and the
+    // eroded count and energy after it in a scene with failure.
+    let bw = base + 9u + params.plastic + 2u * params.failure;
     if (sample) {
         var ke_lane = 0.0;
         for (var b = l; b < nb; b += RG) {
@@ -178,7 +183,13 @@ fn control_end(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (sample) {
         let ke = sh_sum[0].x;
         if (params.plastic != 0u) {
-            history[base + 9u] = inst_res[params.n_instances - 1u].x;
+            history[base + 9u] = inst_res[params.n_instances - 1u - params.failure].x;
+        }
+        if (params.failure != 0u) {
+            // The eroded elements' energy and count (element.wgsl), the last instance.
+            let er = inst_res[params.n_instances - 1u];
+            history[base + 9u + params.plastic] = er.y;
+            history[base + 10u + params.plastic] = er.x;
         }
         let el = inst_res[nb];
         var ext = 0.0;

@@ -7,6 +7,10 @@
 // the stiffness hourglass form are compiled only for scenes that have them (`//#if`): lavapipe
 // runs a branch that its lanes do not take under a mask, and the 10^4-element pile's linear
 // elastic step cost about 100 us more with the neo-Hookean branch in it.
+// Material failure (`//#if failure`, scenes with a material's `failure` only): the criteria of
+// ricochet::element::failure checked after the stress update, in the CPU's order and with its
+// floors; an element that fails erodes at once (ricochet::step::cpu's element stage): no force,
+// no stable step and no inversion check from that step on, its mass left on its nodes.
 
 struct Body {
     model: u32,           // 0 linear elastic, 1 neo-Hookean, 2 J2 plastic
@@ -30,6 +34,34 @@ struct Body {
     jc_c: f32,
     jc_rate0: f32,
 }
+
+//#if failure
+// A body's failure criteria (ricochet::scene::FailureCriteria; Rust mirror gpu::element::GpuFailure).
+struct Failure {
+    flags: u32,           // FAIL_*: the criteria the material has (0: none)
+    plastic_strain: f32,  // equivalent plastic strain at failure
+    principal_strain: f32, // largest principal logarithmic strain at failure
+    tensile_pressure: f32, // mean stress (tension positive) at failure
+    d1: f32,              // Johnson-Cook damage d1..d5 and the rate term's reference rate
+    d2: f32,
+    d3: f32,
+    d4: f32,
+    d5: f32,
+    rate0: f32,
+    _p0: u32,
+    _p1: u32,
+}
+
+const FAIL_PLASTIC: u32 = 1u;
+const FAIL_JOHNSON_COOK: u32 = 2u;
+const FAIL_PRINCIPAL: u32 = 4u;
+const FAIL_TENSILE: u32 = 8u;
+// ricochet::element::failure::MIN_FAILURE_STRAIN.
+const MIN_FAILURE_STRAIN: f32 = 1e-3;
+// The stable step of an eroded element: larger than any element's, below control.wgsl's empty
+// minimum (3e38), so that a step whose elements have all eroded is recognised.
+const ERODED_DT: f32 = 2.9e38;
+//#endif
 
 struct Element {
     c01: vec4<f32>,       // reference corners 0,1 relative to the element centre
@@ -63,6 +95,11 @@ override WG: u32 = 64u;
 //#if plastic
 // J2: (C_p^-1 - I: xx, yy, xy, zz), (alpha, plastic work so far, 0, 0) per element
 @group(0) @binding(9) var<storage, read_write> plastic_state: array<vec4<f32>>;
+//#endif
+//#if failure
+@group(0) @binding(11) var<storage, read> failures: array<Failure>;   // per body
+// Per element: (eroded energy, 1 once eroded, Johnson-Cook damage, 0).
+@group(0) @binding(12) var<storage, read_write> erosion: array<vec4<f32>>;
 //#endif
 
 // Words per element of the dissipative state.
@@ -239,12 +276,73 @@ fn j2_update(bd: Body, h: vec4<f32>, jm1: f32, zm1: f32, d: vec4<f32>, alpha: f3
     return out;
 }
 
+//#if failure
+// The failure check of an element after its stress update (CPU: element::failure::check): its
+// Cauchy stress `s` (xx yy xy zz), deformation gradient `f` (xx xy yx yy) and hoop stretch
+// `f33`, equivalent plastic strain before and after the step, the step `dt` that led here (0 on
+// the first) and its damage before the step. Returns (damage after the step, 1 if it failed).
+fn failure_check(fp: Failure, s: vec4<f32>, f: vec4<f32>, f33: f32, alpha_old: f32, alpha: f32, dt: f32, damage_old: f32) -> vec2<f32> {
+    var failed = false;
+    var damage = damage_old;
+    if ((fp.flags & FAIL_PLASTIC) != 0u) {
+        failed = failed || alpha >= fp.plastic_strain;
+    }
+    let mean = (s.x + s.y + s.w) / 3.0;
+    let a = s.x - s.y;
+    let b = s.y - s.w;
+    let c = s.w - s.x;
+    let vm = sqrt(0.5 * (a * a + b * b + c * c) + 3.0 * s.z * s.z);
+    if ((fp.flags & FAIL_JOHNSON_COOK) != 0u) {
+        let d_alpha = alpha - alpha_old;
+        if (d_alpha > 0.0 && vm > 0.0) {
+            var rate = 0.0;
+            if (dt > 0.0) {
+                rate = d_alpha / dt;
+            }
+            let tri = mean / vm;
+            // No damage below sigma* = -1/3, nor where eps_f is not finite (an overflow).
+            if (tri >= -1.0 / 3.0) {
+                let rate_term = 1.0 + fp.d4 * log(max(rate / fp.rate0, 1.0));
+                // The homologous temperature T* is 0 (no heating): the d5 term is 1.
+                let eps = (fp.d1 + fp.d2 * exp(fp.d3 * tri)) * rate_term;
+                // NaN or +inf (by bit pattern): no damage; -inf takes the floor, as on the CPU.
+                let bits = bitcast<u32>(eps);
+                if (!((bits & 0x7fffffffu) > 0x7f800000u || bits == 0x7f800000u)) {
+                    damage += d_alpha / max(eps, MIN_FAILURE_STRAIN);
+                }
+            }
+        }
+        failed = failed || damage >= 1.0;
+    }
+    if ((fp.flags & FAIL_PRINCIPAL) != 0u) {
+        // C = F^T F in plane; its largest eigenvalue is lambda_max^2.
+        let c11 = f.x * f.x + f.z * f.z;
+        let c22 = f.y * f.y + f.w * f.w;
+        let c12 = f.x * f.y + f.z * f.w;
+        let m = 0.5 * (c11 + c22);
+        let r = length(vec2<f32>(0.5 * (c11 - c22), c12));
+        failed = failed || max(0.5 * log(m + r), log(f33)) >= fp.principal_strain;
+    }
+    if ((fp.flags & FAIL_TENSILE) != 0u) {
+        failed = failed || mean >= fp.tensile_pressure;
+    }
+    return vec2<f32>(damage, select(0.0, 1.0, failed));
+}
+//#endif
+
 @compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
     if (e >= params.n_elems || ctrl.state != STATE_RUNNING) {
         return;
     }
+//#if failure
+    let eroding = erosion[e];
+    if (eroding.y != 0.0) {
+        // Eroded: its force (zero), stable step and sample sums were written when it eroded.
+        return;
+    }
+//#endif
     let el = elems[e];
     let b = bodies[el.body];
     // Per-corner quantities as vec4s over the corners (x components, y components): every loop
@@ -298,6 +396,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         f33d = dot(wc, vx) / rr;
         a0t = area0 * rr;
     }
+    // The hoop stretch r / R (1 off axisymmetric bodies; plane stress's F_33 is not it).
+    let hoop_stretch = 1.0 + zm1;
 
     // Displacement gradient H = F - I and its rate, from the corners' displacements and
     // velocities relative to corner 0 (the same in exact arithmetic, since sum_a b_a = 0): in f32
@@ -328,6 +428,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var p33 = 0.0;
     var w: f32;
     var plastic_work = 0.0;
+    // The Cauchy stress (xx yy xy zz) and equivalent plastic strain before and after the step,
+    // for the failure check.
+    var cauchy = vec4<f32>(0.0);
+    var alpha_old = 0.0;
+    var alpha_new = 0.0;
     if (b.model == 0u) {
 //#if linear_elastic
         let exy = 0.5 * (h.y + h.z);
@@ -339,6 +444,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         p33 = b.lambda * tr + 2.0 * b.mu * zm1;
         pk = vec4<f32>(sxx, sxy, sxy, syy);
         w = 0.5 * (sxx * h.x + syy * h.w + 2.0 * sxy * exy + p33 * zm1);
+//#if failure
+        cauchy = vec4<f32>(sxx, syy, sxy, select(p33, 0.0, b.formulation == 1u));
+//#endif
 //#endif
     } else if (b.model == 2u) {
 //#if plastic
@@ -348,6 +456,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         pk = s.pk;
         p33 = s.p33;
         w = s.stored;
+        cauchy = s.cauchy;
+        alpha_old = ps1.x;
+        alpha_new = s.alpha;
         var acc = ps1.y;
         if (s.yielded) {
             let dtp = ctrl.dt_prev;
@@ -400,6 +511,16 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let hh = dot(h, h);
         let i1_term = 2.0 * (-(h.x * h.w - h.y * h.z) + x_minus_log1p(jm1)) + hh + zm1 * zm1 + 2.0 * x_minus_log1p(zm1);
         w = 0.5 * b.mu * i1_term + 0.5 * b.lambda * ln_j * ln_j;
+//#if failure
+        // Cauchy = P F^T / J, sigma_33 = P_33 F_33 / J.
+        let jj = j * (1.0 + zm1);
+        cauchy = vec4<f32>(
+            (pk.x * f.x + pk.y * f.y) / jj,
+            (pk.z * f.z + pk.w * f.w) / jj,
+            (pk.x * f.z + pk.y * f.w) / jj,
+            p33 * (1.0 + zm1) / jj,
+        );
+//#endif
 //#endif
     }
 
@@ -411,9 +532,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let turn = (cx.yzwx - cx) * (cy.wxyz - cy) - (cy.yzwx - cy) * (cx.wxyz - cx);
     let first = min(3.0e38, turn.x);
     let min_corner = select(min(min(min(first, turn.y), turn.z), turn.w), first, tri);
-    if (!(min_corner > 0.0)) {
-        atomicMin(&ctrl.bad_element, e);
-    }
     // Sides (corner a to a + 1) and the two diagonals, squared.
     let sx = cx.yzwx - cx;
     let sy = cy.yzwx - cy;
@@ -519,6 +637,50 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 //#endif
 
+//#if failure
+    let fp = failures[el.body];
+    if (fp.flags != 0u) {
+        let check = failure_check(fp, cauchy, f, hoop_stretch, alpha_old, alpha_new, ctrl.dt_prev, eroding.z);
+        if (check.y != 0.0) {
+            // Eroded at once (CPU: step::cpu's element stage): no force and no stable step from
+            // now on, no inversion check. Its strain and stored hourglass energy leave with it,
+            // less the half-step work of its unapplied forces (dot(f_n, v^{n-1/2}) dt / 2); its
+            // viscous and plastic work of the step are done, its dissipative state cleared.
+            let half_work = 0.5 * ctrl.dt_prev * (dot(fx, vx) + dot(fy, vy));
+            let energy = w * a0t + hg_stored + half_work;
+            erosion[e] = vec4<f32>(energy, 1.0, check.x, 0.0);
+            elem_force[4u * e] = vec2<f32>(0.0);
+            elem_force[4u * e + 1u] = vec2<f32>(0.0);
+            elem_force[4u * e + 2u] = vec2<f32>(0.0);
+            elem_force[4u * e + 3u] = vec2<f32>(0.0);
+            elem_dt[e] = ERODED_DT;
+//#if dissipation
+            elem_state[ES * e] = vec4<f32>(0.0, 0.0, works);
+            elem_state[ES * e + 1u] = vec4<f32>(0.0);
+//#if axisymmetric
+            elem_state[ES * e + 2u] = vec4<f32>(0.0);
+//#endif
+//#endif
+            // The sample sums it keeps from now on (written once: it never runs again).
+            sample_src[params.n_nodes + e] = vec4<f32>(0.0, 0.0, works);
+            sample_src[params.failure_at + e] = vec4<f32>(energy, 1.0, 0.0, 0.0);
+//#if plastic
+            if (params.plastic != 0u) {
+                var off = params.n_nodes + params.n_elems + params.n_cons;
+                if (params.loads != 0u) {
+                    off += params.n_nodes;
+                }
+                sample_src[off + e] = vec4<f32>(plastic_state[2u * e + 1u].y, 0.0, 0.0, 0.0);
+            }
+//#endif
+            return;
+        }
+        erosion[e] = vec4<f32>(0.0, 0.0, check.x, 0.0);
+    }
+//#endif
+    if (!(min_corner > 0.0)) {
+        atomicMin(&ctrl.bad_element, e);
+    }
     elem_force[4u * e] = vec2<f32>(fx.x, fy.x);
     elem_force[4u * e + 1u] = vec2<f32>(fx.y, fy.y);
     elem_force[4u * e + 2u] = vec2<f32>(fx.z, fy.z);

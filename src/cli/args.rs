@@ -252,6 +252,11 @@ pub struct VerifyArgs {
     /// Adapter name (substring), also from WGPU_ADAPTER_NAME.
     #[arg(long)]
     pub adapter: Option<String>,
+    /// Runs at a time: 1 (the default) runs them one after another; 2 runs the GPU's beside
+    /// the CPU's (and with one backend, two of its runs at once). The results and the report
+    /// are the same but for the wall times, each measured while other runs shared the machine.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub jobs: u32,
 }
 
 /// `run --backend`: the library's [`ricochet::run::Backend`], as the command line names it.

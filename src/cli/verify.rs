@@ -14,6 +14,7 @@ pub fn verify(args: VerifyArgs) -> anyhow::Result<ExitCode> {
         cases,
         case,
         adapter,
+        jobs,
     } = args;
     let opts = ricochet::verify::Options {
         quick,
@@ -23,6 +24,7 @@ pub fn verify(args: VerifyArgs) -> anyhow::Result<ExitCode> {
         only: case,
         out,
         adapter: adapter.or_else(|| std::env::var("WGPU_ADAPTER_NAME").ok()),
+        jobs: jobs as usize,
     };
     let outcome = ricochet::verify::verify(&opts, |line| eprintln!("{line}"))?;
     println!(

@@ -1,7 +1,8 @@
 //! Element stage kernel (`shaders/element.wgsl`): stress, hourglass and bulk-viscosity forces per
 //! element, the element stable step, and on sample steps the element energies; the mirrors of its
-//! `Body` and `Element` and their tables from the model. The CPU reference is
-//! [`crate::element::evaluate`]; `tests/gpu.rs` compares the two on random inputs.
+//! `Body`, `Element` and `Failure` and their tables from the model. The CPU reference is
+//! [`crate::element::evaluate`] (and, for failure, [`crate::element::failure`] with the erosion of
+//! [`crate::step::cpu`]); `tests/gpu.rs` compares the two on random inputs.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -57,7 +58,36 @@ pub struct GpuElement {
     pub _pad: [u32; 2],
 }
 
+/// Mirror of WGSL `Failure`: a body's failure criteria (fields documented in
+/// `shaders/element.wgsl`; all zero for a body whose material has none).
+#[allow(missing_docs)]
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuFailure {
+    pub flags: u32,
+    pub plastic_strain: f32,
+    pub principal_strain: f32,
+    pub tensile_pressure: f32,
+    pub d1: f32,
+    pub d2: f32,
+    pub d3: f32,
+    pub d4: f32,
+    pub d5: f32,
+    pub rate0: f32,
+    pub _pad: [u32; 2],
+}
+
+/// `GpuFailure::flags`: an equivalent plastic strain limit.
+pub const FAIL_PLASTIC: u32 = 1;
+/// `GpuFailure::flags`: Johnson-Cook damage.
+pub const FAIL_JOHNSON_COOK: u32 = 2;
+/// `GpuFailure::flags`: a largest principal strain limit.
+pub const FAIL_PRINCIPAL: u32 = 4;
+/// `GpuFailure::flags`: a spall (tensile mean stress) limit.
+pub const FAIL_TENSILE: u32 = 8;
+
 const _: () = assert!(std::mem::size_of::<GpuBody>() == 80);
+const _: () = assert!(std::mem::size_of::<GpuFailure>() == 48);
 const _: () = assert!(std::mem::size_of::<GpuElement>() == 64);
 
 pub(crate) fn pipeline(device: &wgpu::Device, features: Features) -> wgpu::ComputePipeline {
@@ -105,6 +135,42 @@ pub fn bodies(model: &Model) -> Vec<GpuBody> {
                 jc_rate0: p.jc_rate0 as f32,
                 ..Default::default()
             }
+        })
+        .collect()
+}
+
+/// The failure criteria of `model`'s bodies as the kernel reads them (for scenes with failure).
+pub fn failures(model: &Model) -> Vec<GpuFailure> {
+    model
+        .bodies
+        .iter()
+        .map(|b| {
+            let Some(c) = b.params.failure else {
+                return GpuFailure::default();
+            };
+            let mut g = GpuFailure::default();
+            if let Some(x) = c.plastic_strain {
+                g.flags |= FAIL_PLASTIC;
+                g.plastic_strain = x as f32;
+            }
+            if let Some(d) = c.johnson_cook {
+                g.flags |= FAIL_JOHNSON_COOK;
+                g.d1 = d.d1 as f32;
+                g.d2 = d.d2 as f32;
+                g.d3 = d.d3 as f32;
+                g.d4 = d.d4 as f32;
+                g.d5 = d.d5 as f32;
+                g.rate0 = d.reference_strain_rate as f32;
+            }
+            if let Some(x) = c.principal_strain {
+                g.flags |= FAIL_PRINCIPAL;
+                g.principal_strain = x as f32;
+            }
+            if let Some(x) = c.tensile_pressure {
+                g.flags |= FAIL_TENSILE;
+                g.tensile_pressure = x as f32;
+            }
+            g
         })
         .collect()
 }

@@ -37,7 +37,9 @@ pub struct Params {
     /// 1.0, read at run time: node.wgsl's compensated sum subtracts v * one so that a compiler
     /// that reassociates floating point (Mesa's NIR, a driver's) cannot fold (v + y) - v to y.
     pub one: f32,
-    pub _pad: [u32; 3],
+    pub failure: u32,
+    pub failure_at: u32,
+    pub _pad: u32,
 }
 
 /// Mirror of WGSL `Control`: the run state advanced on the GPU.

@@ -33,6 +33,9 @@ pub struct Features {
     pub plane_stress: bool,
     /// Bodies with the stiffness hourglass form.
     pub hourglass_stiffness: bool,
+    /// Materials with `failure`: the element stage's failure check and erosion state (a scene
+    /// without failure compiles neither, nor their bindings).
+    pub failure: bool,
     /// Contacts or walls by penalty, perturbed or augmented Lagrangian (WGSL `SPRINGS`).
     pub contact_springs: bool,
     /// Contacts or walls with Coulomb friction (WGSL `FRICTION`).
@@ -58,6 +61,7 @@ impl Default for Features {
             neo_hookean: true,
             plane_stress: true,
             hourglass_stiffness: true,
+            failure: false,
             contact_springs: true,
             contact_friction: true,
             reduce_group: 256,
@@ -78,6 +82,7 @@ impl Features {
             "neo_hookean" => self.neo_hookean,
             "plane_stress" => self.plane_stress,
             "hourglass_stiffness" => self.hourglass_stiffness,
+            "failure" => self.failure,
             _ => false,
         }
     }
@@ -88,7 +93,11 @@ impl Features {
         for dissipation in [false, true] {
             for fields in [false, true] {
                 for loads in [false, true] {
-                    for (plastic, axisymmetric) in [(false, false), (true, true)] {
+                    for (plastic, axisymmetric, failure) in [
+                        (false, false, false),
+                        (true, true, true),
+                        (true, false, true),
+                    ] {
                         for (reduce_group, contact_group) in [(64, 8), (256, 256)] {
                             for elastic in [false, true] {
                                 v.push(Features {
@@ -101,6 +110,7 @@ impl Features {
                                     neo_hookean: elastic,
                                     plane_stress: elastic,
                                     hourglass_stiffness: elastic,
+                                    failure,
                                     contact_springs: elastic,
                                     contact_friction: elastic,
                                     reduce_group,

@@ -40,6 +40,11 @@ pub struct Options {
     pub out: PathBuf,
     /// GPU adapter name substring.
     pub adapter: Option<String>,
+    /// Runs at a time: 1 runs them one after another (the default: wall times undisturbed); more
+    /// runs the GPU's runs one after another beside `jobs - 1` workers taking the CPU's (with
+    /// one backend, `jobs` workers). Rows, `results.csv` and the report come out in the same
+    /// order either way; only the wall times (each run's own, measured while others ran) change.
+    pub jobs: usize,
 }
 
 /// One metric of one run.
@@ -236,6 +241,7 @@ pub fn verify(opts: &Options, mut log: impl FnMut(&str)) -> Result<Outcome> {
         out.adapters.push(("gpu".into(), c.adapter_name()));
     }
     let scratch = opts.out.join("runs");
+    let mut jobs = Vec::new();
     for case in &cases {
         let levels = if opts.quick {
             &case.levels.quick
@@ -262,26 +268,22 @@ pub fn verify(opts: &Options, mut log: impl FnMut(&str)) -> Result<Outcome> {
                     continue;
                 }
                 for (i, level) in levels.iter().enumerate() {
-                    let rows = run_one(case, method, backend.clone(), i, level, &scratch)?;
-                    let first = rows.first();
-                    log(&format!(
-                        "{} {method} {bname} level {i} ({} = {}): {} elements, {} steps, {:.3} s{}",
-                        case.case.name,
-                        case.case.size,
-                        level.get(&case.case.size).copied().unwrap_or(0.0),
-                        first.map_or(0, |r| r.elements),
-                        first.map_or(0, |r| r.steps),
-                        first.map_or(0.0, |r| r.wall_seconds),
-                        first
-                            .filter(|r| !r.note.is_empty())
-                            .map_or(String::new(), |r| format!(": {}", r.note))
-                    ));
-                    out.rows.extend(rows);
+                    jobs.push(Job {
+                        case,
+                        method,
+                        ctx: backend.clone(),
+                        index: i,
+                        level,
+                    });
                 }
             }
         }
     }
+    let rows = run_jobs(&jobs, opts.jobs.max(1), &scratch, &mut log);
     let _ = std::fs::remove_dir_all(&scratch);
+    for r in rows {
+        out.rows.extend(r?);
+    }
     judge(&cases, &mut out, levels_count(&cases, opts.quick));
     out.cases = cases;
     report::write_csv(&opts.out.join("results.csv"), &out.rows)?;
@@ -293,6 +295,108 @@ pub fn verify(opts: &Options, mut log: impl FnMut(&str)) -> Result<Outcome> {
 }
 
 type Ladder = Vec<std::collections::BTreeMap<String, f64>>;
+
+/// One run of the suite: a case's level with one method on one backend (`ctx`: the GPU's).
+struct Job<'a> {
+    case: &'a Case,
+    method: &'a str,
+    ctx: Option<Arc<GpuContext>>,
+    index: usize,
+    level: &'a std::collections::BTreeMap<String, f64>,
+}
+
+impl Job<'_> {
+    fn run(&self, scratch: &Path) -> Result<Vec<Row>> {
+        run_one(
+            self.case,
+            self.method,
+            self.ctx.clone(),
+            self.index,
+            self.level,
+            scratch,
+        )
+    }
+
+    /// The progress line of a finished run.
+    fn line(&self, rows: &Result<Vec<Row>>) -> String {
+        let (case, method, i) = (&self.case.case, self.method, self.index);
+        let bname = if self.ctx.is_some() { "gpu" } else { "cpu" };
+        let Ok(rows) = rows else {
+            return format!("{} {method} {bname} level {i}: failed", case.name);
+        };
+        let first = rows.first();
+        format!(
+            "{} {method} {bname} level {i} ({} = {}): {} elements, {} steps, {:.3} s{}",
+            case.name,
+            case.size,
+            self.level.get(&case.size).copied().unwrap_or(0.0),
+            first.map_or(0, |r| r.elements),
+            first.map_or(0, |r| r.steps),
+            first.map_or(0.0, |r| r.wall_seconds),
+            first
+                .filter(|r| !r.note.is_empty())
+                .map_or(String::new(), |r| format!(": {}", r.note))
+        )
+    }
+}
+
+/// Runs the jobs, `jobs` at a time (see [`Options::jobs`]), logging each as it ends; their rows
+/// in the jobs' order. One at a time, the suite stops at the first run that errs.
+fn run_jobs(
+    list: &[Job],
+    jobs: usize,
+    scratch: &Path,
+    log: &mut impl FnMut(&str),
+) -> Vec<Result<Vec<Row>>> {
+    if jobs <= 1 {
+        let mut out = Vec::new();
+        for job in list {
+            let rows = job.run(scratch);
+            log(&job.line(&rows));
+            let failed = rows.is_err();
+            out.push(rows);
+            if failed {
+                break;
+            }
+        }
+        return out;
+    }
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let gpu: Vec<usize> = (0..list.len()).filter(|&i| list[i].ctx.is_some()).collect();
+    let cpu: Vec<usize> = (0..list.len()).filter(|&i| list[i].ctx.is_none()).collect();
+    // The device's runs one after another in one worker; the CPU's shared by the others.
+    let cpu_workers = if gpu.is_empty() { jobs } else { jobs - 1 };
+    let (next_cpu, next_gpu) = (AtomicUsize::new(0), AtomicUsize::new(0));
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, Result<Vec<Row>>)>();
+    let mut results: Vec<Option<Result<Vec<Row>>>> = (0..list.len()).map(|_| None).collect();
+    std::thread::scope(|scope| {
+        let worker = |queue: &'_ [usize], next: &'_ AtomicUsize, tx: std::sync::mpsc::Sender<_>| loop {
+            let Some(&i) = queue.get(next.fetch_add(1, Ordering::Relaxed)) else {
+                break;
+            };
+            let rows = list[i].run(scratch);
+            if tx.send((i, rows)).is_err() {
+                break;
+            }
+        };
+        if !gpu.is_empty() {
+            let tx = tx.clone();
+            let (queue, next) = (&gpu, &next_gpu);
+            scope.spawn(move || worker(queue, next, tx));
+        }
+        for _ in 0..cpu_workers.max(1).min(cpu.len()) {
+            let tx = tx.clone();
+            let (queue, next) = (&cpu, &next_cpu);
+            scope.spawn(move || worker(queue, next, tx));
+        }
+        drop(tx);
+        for (i, rows) in rx {
+            log(&list[i].line(&rows));
+            results[i] = Some(rows);
+        }
+    });
+    results.into_iter().flatten().collect()
+}
 
 fn levels_count(cases: &[Case], quick: bool) -> Vec<(usize, Ladder)> {
     cases

@@ -89,6 +89,14 @@ pub fn write_markdown(path: &Path, out: &Outcome, opts: &Options) -> Result<()> 
     for (b, name) in &out.adapters {
         let _ = writeln!(s, "- `{b}`: {name}");
     }
+    if opts.jobs > 1 {
+        let _ = writeln!(
+            s,
+            "\nThe runs were made {} at a time (`--jobs {}`): each wall time was measured while \
+             others ran, so the times are longer than those of runs made one at a time.",
+            opts.jobs, opts.jobs
+        );
+    }
     let _ = writeln!(
         s,
         "\nEach case runs a refinement ladder; the error of a metric is |value - reference| / scale \

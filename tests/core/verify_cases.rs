@@ -310,3 +310,55 @@ fn the_friction_cases_pass_their_bounds_on_the_cpu() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `verify --jobs 2` makes two CPU runs at a time and gives the same rows in the same order as
+/// `--jobs 1` (every column of `results.csv` but the wall times), says so in its report, and
+/// `--jobs 0` is refused.
+#[test]
+fn verify_jobs_give_the_same_rows_in_the_same_order() {
+    let run = |jobs: &str| {
+        let out = tmp_dir(&format!("verify-jobs-{jobs}"));
+        let o = std::process::Command::new(bin())
+            .args(["verify", "--quick", "--backend", "cpu", "--jobs", jobs])
+            .args(["--case", "rods", "rod_wall", "patch_test", "--out"])
+            .arg(&out)
+            .output()
+            .expect("run verify");
+        let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+        (o.status.code(), text(&o.stdout), text(&o.stderr), out)
+    };
+    let mut csv = Vec::new();
+    for jobs in ["1", "2"] {
+        let (code, stdout, stderr, out) = run(jobs);
+        assert_eq!(code, Some(0), "--jobs {jobs}: {stdout}\n{stderr}");
+        assert!(stdout.contains("all cases pass their bounds"), "{stdout}");
+        let report = std::fs::read_to_string(out.join("report.md")).expect("report.md");
+        assert_eq!(
+            report.contains("2 at a time (`--jobs 2`)"),
+            jobs == "2",
+            "--jobs {jobs}: the report says how the runs were made"
+        );
+        let text = std::fs::read_to_string(out.join("results.csv")).expect("results.csv");
+        let header: Vec<&str> = text.lines().next().unwrap_or("").split(',').collect();
+        let wall = header
+            .iter()
+            .position(|h| *h == "wall_seconds")
+            .expect("wall_seconds");
+        let rows: Vec<String> = text
+            .lines()
+            .map(|l| {
+                let mut f: Vec<&str> = l.split(',').collect();
+                f.remove(wall);
+                f.join(",")
+            })
+            .collect();
+        assert!(rows.len() > 10, "{text}");
+        csv.push(rows);
+        let _ = std::fs::remove_dir_all(&out);
+    }
+    assert_eq!(csv[0], csv[1], "--jobs 2 changed the rows or their order");
+    let (code, _, stderr, out) = run("0");
+    let _ = std::fs::remove_dir_all(&out);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("--jobs"), "{stderr}");
+}

@@ -86,6 +86,9 @@ fn expected_buffers(plan: &Plan) -> BTreeSet<&'static str> {
         b.extend(CONTACT);
         b.extend(CONTACT_INDEX);
     }
+    if plan.has(Failure) {
+        b.extend(["body_failure", "element_erosion"]);
+    }
     b
 }
 
@@ -108,6 +111,9 @@ fn expected_sizes(plan: &Plan) -> Vec<(&'static str, u64)> {
     }
     if plan.has(Pressure) || plan.has(MassDamping) {
         s.push(("v_old", 8 * nn));
+    }
+    if plan.has(Failure) {
+        s.push(("element_erosion", 16 * ne));
     }
     s
 }
@@ -159,6 +165,7 @@ fn gpu_allocates_exactly_the_buffers_and_kernels_the_plan_uses() {
             assert_eq!(k.features.loads, loads, "{name}");
             assert_eq!(k.features.dissipation, plan.has_dissipation(), "{name}");
             assert_eq!(k.features.fields, plan.has(Fields), "{name}");
+            assert_eq!(k.features.failure, plan.has(Failure), "{name}");
         }
     }
 }

@@ -11,7 +11,7 @@ use std::process::Command;
 use ricochet::checkpoint::Checkpoint;
 
 #[path = "../shared/restart.rs"]
-mod shared_restart;
+pub(crate) mod shared_restart;
 use shared_restart::{assert_same_outputs, copy_dir, run_interrupted_halfway, summary};
 
 fn asset(name: &str) -> PathBuf {

@@ -14,7 +14,15 @@ fn quick_verify_passes_on_cpu_and_gpu_and_writes_the_report_and_plots() {
     let out = std::env::temp_dir().join(format!("ricochet-verify-{}", std::process::id()));
     let o = Command::new(env!("CARGO_BIN_EXE_ricochet"))
         .current_dir(root)
-        .args(["verify", "--quick", "--backend", "both", "--out"])
+        .args([
+            "verify",
+            "--quick",
+            "--backend",
+            "both",
+            "--jobs",
+            "2",
+            "--out",
+        ])
         .arg(&out)
         .output()
         .expect("run ricochet verify");

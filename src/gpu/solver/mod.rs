@@ -112,13 +112,6 @@ impl GpuSolver {
         fused: Option<bool>,
         contact: ContactOptions,
     ) -> Result<Self> {
-        if plan.has(Stage::Failure) {
-            return Err(Error::Gpu(
-                "material failure and erosion (a material's `failure`) run on the CPU reference \
-                 only so far: use --backend cpu"
-                    .into(),
-            ));
-        }
         let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let any = |f: &dyn Fn(&crate::model::BodyModel) -> bool| model.bodies.iter().any(f);
         use crate::scene::{ContactMethod, Formulation, HourglassForm, MaterialModel};
@@ -134,6 +127,7 @@ impl GpuSolver {
             neo_hookean: any(&|b| b.params.model == MaterialModel::NeoHookean),
             plane_stress: any(&|b| b.params.formulation == Formulation::PlaneStress),
             hourglass_stiffness: any(&|b| b.params.hourglass == HourglassForm::Stiffness),
+            failure: plan.has(Stage::Failure),
             contact_springs: model
                 .contacts
                 .iter()

@@ -74,7 +74,9 @@ impl GpuSolver {
         let chist: &[u8] = &rows_bytes[at..at + 4 * cstride * new_rows];
         let mut row_events = Vec::new();
         for j in 0..ctrl.rows.saturating_sub(self.rows_read) as usize {
-            row_events.push(Event::Sample(self.sample(hist, chist, j)));
+            let sample = self.sample(hist, chist, j);
+            self.counters.eroded_elements = sample.eroded_elements;
+            row_events.push(Event::Sample(sample));
         }
         self.rows_read = self.rows_read.max(ctrl.rows);
         if ctrl.dt_next > 0.0 {
@@ -130,8 +132,10 @@ impl GpuSolver {
     /// as a sample.
     fn sample(&self, hist: &[u8], chist: &[u8], j: usize) -> Sample {
         let nb = self.names.body_count();
-        // The plastic work's word before the bodies' (plastic scenes).
+        // The plastic work's word before the bodies' (plastic scenes), then the eroded count and
+        // energy (scenes with failure).
         let pw = self.state.params.plastic as usize;
+        let fw = 2 * self.state.params.failure as usize;
         let base = j * self.state.params.row_stride as usize;
         let w = |i: usize| -> f32 {
             bytemuck::pod_read_unaligned(&hist[4 * (base + i)..4 * (base + i) + 4])
@@ -145,14 +149,19 @@ impl GpuSolver {
             hourglass: w(6) as f64,
             viscous: w(7) as f64,
             plastic: if pw > 0 { w(9) as f64 } else { 0.0 },
-            eroded_elements: 0,
-            eroded_energy: 0.0,
+            eroded_elements: if fw > 0 { w(9 + pw) as u64 } else { 0 },
+            eroded_energy: if fw > 0 { w(10 + pw) as f64 } else { 0.0 },
             external: w(8) as f64,
             contact: 0.0,
             friction: 0.0,
             contacts: Vec::new(),
             body_velocity: (0..nb)
-                .map(|b| [w(9 + pw + 2 * b) as f64, w(10 + pw + 2 * b) as f64])
+                .map(|b| {
+                    [
+                        w(9 + pw + fw + 2 * b) as f64,
+                        w(10 + pw + fw + 2 * b) as f64,
+                    ]
+                })
                 .collect(),
         };
         if let Some(c) = &self.state.contact {

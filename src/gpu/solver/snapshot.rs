@@ -1,5 +1,5 @@
 //! Snapshots of the nodal state read back from the device: at the snapshot times of a run
-//! (displacements, velocities at t_n, the plastic state), and on demand (the nodes now). The CPU
+//! (displacements, velocities at t_n, the plastic state, the erosion flags and damage), and on demand (the nodes now). The CPU
 //! reference takes the same snapshots from its own arrays ([`crate::step::cpu::CpuSolver`]).
 
 use crate::element::plastic::PlasticState;
@@ -42,15 +42,34 @@ impl GpuSolver {
             })
             .collect();
         let plastic = self.plastic_state()?;
+        let (eroded, damage) = self.erosion_state()?;
         Ok(Snapshot {
             time,
             step,
             displacement,
             velocity,
             plastic,
-            eroded: Vec::new(),
-            damage: Vec::new(),
+            eroded,
+            damage,
         })
+    }
+
+    /// Per element whether it eroded (empty without failure) and its Johnson-Cook damage (empty
+    /// without Johnson-Cook damage), as the CPU reference's snapshots carry them.
+    pub(crate) fn erosion_state(&mut self) -> Result<(Vec<bool>, Vec<f64>)> {
+        let Some(buf) = self.state.erosion.clone() else {
+            return Ok((Vec::new(), Vec::new()));
+        };
+        let ne = self.state.params.n_elems as u64;
+        let bytes = self.read_copies("erosion_readback", &[(&buf, 0, 16 * ne)])?;
+        let f: &[f32] = bytemuck::cast_slice(&bytes);
+        let eroded = (0..ne as usize).map(|e| f[4 * e + 1] != 0.0).collect();
+        let damage = if self.state.damage {
+            (0..ne as usize).map(|e| f[4 * e + 2] as f64).collect()
+        } else {
+            Vec::new()
+        };
+        Ok((eroded, damage))
     }
 
     /// The plastic state of every element (empty without a plastic body): C_p^-1 = I + the

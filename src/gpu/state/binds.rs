@@ -66,7 +66,12 @@ impl Binds {
                 (7, &b.sample_src),
                 (10, &b.v_prev),
             ],
-            &[(8, b.elem_state.as_ref()), (9, b.plastic.as_ref())],
+            &[
+                (8, b.elem_state.as_ref()),
+                (9, b.plastic.as_ref()),
+                (11, b.failures.as_ref()),
+                (12, b.erosion.as_ref()),
+            ],
         );
         let node = bind(
             device,

@@ -78,6 +78,11 @@ pub struct GpuState {
     pub(crate) u_snap: Option<wgpu::Buffer>,
     /// J2 plastic state per element (scenes with a plastic body only).
     pub(crate) plastic: Option<wgpu::Buffer>,
+    /// Erosion state per element: (eroded energy, eroded flag, Johnson-Cook damage, 0) (scenes
+    /// with failure only).
+    pub(crate) erosion: Option<wgpu::Buffer>,
+    /// Whether a body's material has Johnson-Cook damage (snapshots carry the damage).
+    pub(crate) damage: bool,
     pub(crate) history: wgpu::Buffer,
     pub(crate) indirect: wgpu::Buffer,
     /// Contact buffers (scenes with contact only).
@@ -112,6 +117,8 @@ struct Buffers {
     elem_dt: wgpu::Buffer,
     elem_state: Option<wgpu::Buffer>,
     plastic: Option<wgpu::Buffer>,
+    failures: Option<wgpu::Buffer>,
+    erosion: Option<wgpu::Buffer>,
     v_prev: wgpu::Buffer,
     u_snap: Option<wgpu::Buffer>,
     curves: Option<wgpu::Buffer>,
@@ -135,14 +142,13 @@ fn time_table(interval: f64, end: f64) -> Vec<[u32; 2]> {
 }
 
 /// The sample instances (one per body, its nodes; the elements; the constraints; with loads the
-/// nodes' load work; with plastic bodies the elements' plastic work) of `nn` nodes, `ne`
-/// elements and `nc` constraints, for reductions of `rg` threads, and their first-level
-/// workgroups in all.
+/// nodes' load work; with plastic bodies the elements' plastic work; with failure the eroded
+/// elements' energy and count) of `nn` nodes, `ne` elements and `nc` constraints, for reductions
+/// of `rg` threads, and their first-level workgroups in all.
 fn sample_instances(
     model: &Model,
     (nn, ne, nc): (usize, usize, usize),
-    loads: bool,
-    plastic: bool,
+    (loads, plastic, failure): (bool, bool, bool),
     rg: u32,
 ) -> (Vec<Instance>, u32) {
     let nl = if loads { nn } else { 0 };
@@ -171,8 +177,13 @@ fn sample_instances(
         push(nn + ne + nc, nl, 1.0);
     }
     // J2 plastic work, one accumulator per element after the loads' (element.wgsl).
+    let npl = if plastic { ne } else { 0 };
     if plastic {
         push(nn + ne + nc + nl, ne, 1.0);
+    }
+    // Eroded energy and count, one entry per element after the plastic work's (element.wgsl).
+    if failure {
+        push(nn + ne + nc + nl + npl, ne, 1.0);
     }
     (instances, first)
 }
@@ -235,12 +246,15 @@ impl GpuState {
         let nl = if has_loads { nn } else { 0 };
         let plastic = kernels.features.plastic;
         let npl = if plastic { ne } else { 0 };
+        let failure = kernels.features.failure;
+        let nf = if failure { ne } else { 0 };
         let rg = kernels.features.reduce_group;
-        let (instances, first) = sample_instances(model, (nn, ne, nc), has_loads, plastic, rg);
+        let (instances, first) =
+            sample_instances(model, (nn, ne, nc), (has_loads, plastic, failure), rg);
         // Small models on CPU adapters: the control workgroup reduces directly (see control.wgsl).
         let fused = fused.unwrap_or(
             kernels.features.reduce_group == 64
-                && nn + ne + nc + nl + npl <= FUSED_LIMIT
+                && nn + ne + nc + nl + npl + nf <= FUSED_LIMIT
                 && instances.len() <= FUSED_INSTANCES,
         );
         let sum_groups = if fused { 0 } else { first };
@@ -259,8 +273,9 @@ impl GpuState {
             n_snapshot_times = snaps.len() as u32;
             times.extend(snaps);
         }
-        // Time, step, dt, the five energies, the plastic work with a plastic body, then per body.
-        let row_stride = 9 + u32::from(plastic) + 2 * nb as u32;
+        // Time, step, dt, the five energies, the plastic work with a plastic body, the eroded
+        // count and energy with failure, then per body.
+        let row_stride = 9 + u32::from(plastic) + 2 * u32::from(failure) + 2 * nb as u32;
         let row_cap = row_capacity(row_stride, device.limits().max_storage_buffer_binding_size);
         if ticks_per_end(schedule.end_time) < MIN_TICKS_PER_END {
             return Err(Error::Gpu(format!(
@@ -297,7 +312,13 @@ impl GpuState {
             gravity_y: model.gravity[1] as f32,
             gravity_ramp: model.gravity_ramp as f32,
             one: 1.0,
-            _pad: [0; 3],
+            failure: u32::from(failure),
+            failure_at: if failure {
+                (nn + ne + nc + nl + npl) as u32
+            } else {
+                0
+            },
+            _pad: 0,
             loads: u32::from(has_loads),
             plastic: u32::from(plastic),
             inst_groups: if fused {
@@ -348,6 +369,16 @@ impl GpuState {
                 .then(|| a.zeroed("element_dissipation", 16 * es_words * ne as u64, storage)),
             // J2: C_p^-1 - I and (alpha, plastic work) per element; zero is the virgin state.
             plastic: plastic.then(|| a.zeroed("element_plastic_state", 32 * ne as u64, storage)),
+            // Failure: the bodies' criteria, and per element (eroded energy, flag, damage, 0);
+            // zero is the intact state.
+            failures: failure.then(|| {
+                a.init(
+                    "body_failure",
+                    bytemuck::cast_slice(&element::failures(model)),
+                    storage,
+                )
+            }),
+            erosion: failure.then(|| a.zeroed("element_erosion", 16 * ne as u64, storage)),
             // v^{n-1/2} per node, then the f32 rounding residuals of each node's last velocity
             // update and of its last displacement update (node.wgsl's compensated sums, joined by
             // the contact's corrections), carried to the next step (and in the checkpoint like
@@ -372,7 +403,7 @@ impl GpuState {
             }),
             sample_src: a.zeroed(
                 "sample_sources",
-                16 * (nn + ne + nc + nl + npl) as u64,
+                16 * (nn + ne + nc + nl + npl + nf) as u64,
                 storage,
             ),
             // First-level reduction results; when the control workgroup reduces directly
@@ -444,6 +475,8 @@ impl GpuState {
             v_prev: b.v_prev,
             u_snap: b.u_snap,
             plastic: b.plastic,
+            erosion: b.erosion,
+            damage: failure && model.has_damage(),
             history: b.history,
             indirect: b.indirect,
             contact,

@@ -1,0 +1,297 @@
+//! Material failure and erosion on the GPU against the CPU reference (lavapipe in CI): a freely
+//! stretching block whose elements erode at a plastic-strain limit, and one whose elements erode
+//! by Johnson-Cook damage: the same elements erode, each count reached within one step of the
+//! CPU's, the energy balances with the eroded energy counted, two GPU runs give the same bits
+//! (and the reductions over many workgroups the same erosion),
+//! and a restart from a checkpoint taken after some elements eroded ends with the outputs of the
+//! run never stopped; in neo-Hookean and linear elastic blocks the principal-strain and spall
+//! limits erode the CPU's elements. A scene without failure compiles neither the check nor its
+//! buffers.
+
+use super::*;
+
+use std::process::Command;
+
+use ricochet::checkpoint::Checkpoint;
+use ricochet::output::history::EnergyAudit;
+use ricochet::step::{Event, Sample, Snapshot};
+
+#[path = "../shared/failure_scene.rs"]
+mod failure_scene;
+use failure_scene::stretching_block;
+
+use crate::restart::shared_restart;
+
+/// The stretching block (4 x 8 elements at 2000 /s to 20 us, history every 0.1 us) with its
+/// failure table replaced by `failure`.
+fn block(failure: &str) -> String {
+    stretching_block(2000.0, 2.0e-5, 0.01).replace("{ plastic_strain = 0.01 }", failure)
+}
+
+/// The plastic-strain limit of the CPU's stretched block, and Johnson-Cook damage alone
+/// (eps_f about 0.01 at the triaxiality of uniaxial plane strain).
+const CRITERIA: [&str; 2] = [
+    "{ plastic_strain = 0.01 }",
+    "{ johnson_cook = { d1 = 0.005, d2 = 0.01, d3 = -1.5, d4 = 0.0, d5 = 0.0 } }",
+];
+
+/// The samples and snapshots of a run of `solver` to its end.
+fn run_to_end(solver: &mut dyn Solver) -> (Vec<Sample>, Vec<Snapshot>) {
+    let (mut samples, mut snaps, mut events) = (Vec::new(), Vec::new(), Vec::new());
+    while !solver.finished() {
+        solver.advance(&mut events).expect("advance");
+        for e in events.drain(..) {
+            match e {
+                Event::Sample(s) => samples.push(s),
+                Event::Snapshot(s) => snaps.push(s),
+                Event::Failed(f) => panic!("run failed: {f:?}"),
+                Event::Done => {}
+            }
+        }
+    }
+    (samples, snaps)
+}
+
+#[test]
+fn gpu_erosion_matches_the_cpu_reference_and_repeats_bit_for_bit() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for failure in CRITERIA {
+        let text = block(failure);
+        let (scene, model, plan) = load(&text, "block.toml");
+        let ne = model.element_count();
+        let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
+        let (cs, csnap) = run_to_end(&mut cpu);
+        let mut gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+        let (gs, gsnap) = run_to_end(&mut gpu);
+        assert_eq!(cs.len(), gs.len(), "{failure}: history rows");
+        let (cl, gl) = (cs.last().unwrap(), gs.last().unwrap());
+        assert!(
+            cl.eroded_elements > 0 && (cl.eroded_elements as usize) < ne,
+            "{failure}: {} of {ne} eroded on the CPU",
+            cl.eroded_elements
+        );
+        // The same elements eroded by the end.
+        let (ce, ge) = (&csnap.last().unwrap().eroded, &gsnap.last().unwrap().eroded);
+        assert_eq!(ce.len(), ne);
+        assert_eq!(ce, ge, "{failure}: eroded elements, CPU then GPU");
+        // A row every step: each count the GPU reaches, it reaches within one step of the CPU.
+        for j in 0..cs.len() {
+            let lo = cs[j.saturating_sub(1)].eroded_elements;
+            let hi = cs[(j + 1).min(cs.len() - 1)].eroded_elements;
+            assert_eq!(cs[j].step, gs[j].step);
+            assert!(
+                (lo..=hi).contains(&gs[j].eroded_elements),
+                "{failure}: step {}: {} eroded on the GPU, {lo}..{hi} on the CPU",
+                gs[j].step,
+                gs[j].eroded_elements
+            );
+        }
+        // The eroded energy agrees, and the balance holds with it as on the CPU.
+        let rel = (gl.eroded_energy - cl.eroded_energy).abs() / cl.eroded_energy;
+        assert!(rel < 1e-3, "{failure}: eroded energy {rel:e} apart");
+        let (mut ca, mut ga) = (EnergyAudit::default(), EnergyAudit::default());
+        for (c, g) in cs.iter().zip(&gs) {
+            ca.error(c);
+            ga.error(g);
+        }
+        println!(
+            "{failure}: {} of {ne} eroded, eroded energy {:e} (CPU {:e}) J, energy error GPU {:e}, CPU {:e}",
+            gl.eroded_elements, gl.eroded_energy, cl.eroded_energy, ga.max_error, ca.max_error
+        );
+        assert!(ga.max_error < 1e-3, "{failure}: {}", ga.max_error);
+        // The Johnson-Cook damage in the snapshots (empty without it).
+        let damage = &gsnap.last().unwrap().damage;
+        if failure.contains("johnson_cook") {
+            assert_eq!(damage.len(), ne);
+            for (e, (&g, &c)) in damage.iter().zip(&csnap.last().unwrap().damage).enumerate() {
+                assert!(
+                    (g - c).abs() < 1e-2 * c.max(0.1),
+                    "element {e}: damage {g} vs {c}"
+                );
+            }
+        } else {
+            assert!(damage.is_empty());
+        }
+        // A second GPU run: the same bits.
+        let mut again = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+        let (gs2, gsnap2) = run_to_end(&mut again);
+        assert_eq!(gs, gs2, "{failure}: two GPU runs differ");
+        assert_eq!(gsnap, gsnap2, "{failure}: two GPU runs' snapshots differ");
+        // The reductions over many workgroups (the path of GPUs and of large models): the same
+        // elements erode at the same steps, the eroded energy summed in another fixed order.
+        let mut multi =
+            GpuSolver::with_reductions(ctx.clone(), &model, &plan, schedule(&scene), Some(false))
+                .expect("gpu");
+        assert!(multi.state().params.sum_groups > 0);
+        let (ms, msnap) = run_to_end(&mut multi);
+        assert_eq!(
+            msnap.last().unwrap().eroded,
+            *ge,
+            "{failure}: multi-level reductions"
+        );
+        for (m, g) in ms.iter().zip(&gs) {
+            assert_eq!(
+                m.eroded_elements, g.eroded_elements,
+                "{failure}: step {}",
+                g.step
+            );
+            assert!((m.eroded_energy - g.eroded_energy).abs() <= 1e-5 * cl.eroded_energy);
+        }
+    }
+}
+
+/// The stretching block of an elastic material `model` (its yield keys removed) with `failure`.
+fn elastic_block(model: &str, failure: &str) -> String {
+    block(failure)
+        .replace("model = \"j2_plastic\"", &format!("model = \"{model}\""))
+        .lines()
+        .filter(|l| !l.starts_with("yield_stress") && !l.starts_with("hardening_modulus"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn gpu_principal_strain_and_spall_limits_erode_the_cpus_elements_in_elastic_bodies() {
+    // The elastic models' Cauchy stress and the principal strain (element.wgsl's linear elastic
+    // and neo-Hookean branches), which the plastic cases above do not reach.
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for (model, failure) in [
+        ("neo_hookean", "{ principal_strain = 0.004 }"),
+        ("linear_elastic", "{ tensile_pressure = 2.0e8 }"),
+        ("neo_hookean", "{ tensile_pressure = 2.0e8 }"),
+    ] {
+        let text = elastic_block(model, failure);
+        let (scene, m, plan) = load(&text, "block.toml");
+        let ne = m.element_count();
+        let mut cpu = CpuSolver::new(m.clone(), plan.clone(), schedule(&scene));
+        let (cs, csnap) = run_to_end(&mut cpu);
+        let mut gpu = GpuSolver::new(ctx.clone(), &m, &plan, schedule(&scene)).expect("gpu");
+        let (gs, gsnap) = run_to_end(&mut gpu);
+        let what = format!("{model} {failure}");
+        let (cl, gl) = (cs.last().unwrap(), gs.last().unwrap());
+        println!(
+            "{what}: {} of {ne} eroded on the CPU, {} on the GPU",
+            cl.eroded_elements, gl.eroded_elements
+        );
+        assert!(
+            cl.eroded_elements > 0 && (cl.eroded_elements as usize) < ne,
+            "{what}: {} of {ne} eroded on the CPU",
+            cl.eroded_elements
+        );
+        assert_eq!(
+            csnap.last().unwrap().eroded,
+            gsnap.last().unwrap().eroded,
+            "{what}: eroded elements, CPU then GPU"
+        );
+        for j in 0..cs.len() {
+            let lo = cs[j.saturating_sub(1)].eroded_elements;
+            let hi = cs[(j + 1).min(cs.len() - 1)].eroded_elements;
+            assert!(
+                (lo..=hi).contains(&gs[j].eroded_elements),
+                "{what}: step {}: {} eroded on the GPU, {lo}..{hi} on the CPU",
+                gs[j].step,
+                gs[j].eroded_elements
+            );
+        }
+    }
+}
+
+#[test]
+fn a_gpu_run_with_erosion_restarts_to_the_same_outputs() {
+    let Some(_) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    // Both criteria at once: the checkpoint carries the flags and the damage.
+    let text = block(
+        "{ plastic_strain = 0.01, johnson_cook = { d1 = 0.05, d2 = 0.01, d3 = -1.5, d4 = 0.0, d5 = 0.0 } }",
+    );
+    let base = std::env::temp_dir().join(format!("ricochet-gpu-failure-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).unwrap();
+    let path = base.join("block.toml");
+    std::fs::write(&path, &text).unwrap();
+    let bin = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_ricochet"))
+            .args(args)
+            .output()
+            .expect("run the binary")
+    };
+    let a = base.join("a");
+    let o = bin(&[
+        "run",
+        path.to_str().unwrap(),
+        "--backend",
+        "gpu",
+        "--checkpoint-interval",
+        "1.2e-5",
+        "--out",
+        a.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    let c = Checkpoint::read(&a).expect("the run left a checkpoint");
+    assert_eq!(c.backend, "gpu");
+    // Some elements, not all, had eroded when the checkpoint was taken.
+    let history = std::fs::read_to_string(a.join("history.csv")).unwrap();
+    let mut lines = history.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (tc, ec) = (col("time"), col("eroded_elements"));
+    let at_checkpoint = lines
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|r| r[tc].parse::<f64>().unwrap() <= c.time)
+        .map(|r| r[ec].parse::<u64>().unwrap())
+        .next_back()
+        .unwrap();
+    assert!(
+        at_checkpoint > 0 && at_checkpoint < 32,
+        "{at_checkpoint} eroded at the checkpoint (t = {:e})",
+        c.time
+    );
+    // A crash after the checkpoint: its folder, restarted.
+    let b = base.join("b");
+    shared_restart::copy_dir(&a, &b);
+    let o = bin(&["run", "--restart", b.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    shared_restart::assert_same_outputs(&a, &b);
+    let _ = std::fs::remove_dir_all(&base);
+}
+
+#[test]
+fn a_scene_without_failure_compiles_no_failure_check_or_buffers() {
+    let plain = shader::source(ricochet::gpu::element::SOURCE, Features::default());
+    assert!(
+        !plain.contains("fn failure_check") && !plain.contains("var<storage, read_write> erosion"),
+        "no failure check nor erosion state without failure"
+    );
+    let failing = shader::source(
+        ricochet::gpu::element::SOURCE,
+        Features {
+            failure: true,
+            plastic: true,
+            ..Features::default()
+        },
+    );
+    assert!(
+        failing.contains("fn failure_check")
+            && failing.contains("var<storage, read_write> erosion")
+    );
+    shader::validate("element with failure", &failing).expect("valid WGSL");
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for (text, with) in [
+        (block(CRITERIA[0]), true),
+        (
+            block(CRITERIA[0]).replace(&format!("failure = {}\n", CRITERIA[0]), ""),
+            false,
+        ),
+    ] {
+        let (scene, model, plan) = load(&text, "block.toml");
+        assert_eq!(model.has_failure(), with);
+        let gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+        let names: Vec<&str> = gpu.state().allocated.iter().map(|(n, _)| *n).collect();
+        assert_eq!(names.contains(&"element_erosion"), with, "{names:?}");
+        assert_eq!(names.contains(&"body_failure"), with, "{names:?}");
+        assert_eq!(gpu.kernels().features.failure, with);
+    }
+}
