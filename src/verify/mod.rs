@@ -370,13 +370,11 @@ fn run_jobs(
     let (tx, rx) = std::sync::mpsc::channel::<(usize, Result<Vec<Row>>)>();
     let mut results: Vec<Option<Result<Vec<Row>>>> = (0..list.len()).map(|_| None).collect();
     std::thread::scope(|scope| {
-        let worker = |queue: &'_ [usize], next: &'_ AtomicUsize, tx: std::sync::mpsc::Sender<_>| loop {
-            let Some(&i) = queue.get(next.fetch_add(1, Ordering::Relaxed)) else {
-                break;
-            };
-            let rows = list[i].run(scratch);
-            if tx.send((i, rows)).is_err() {
-                break;
+        let worker = |queue: &'_ [usize], next: &'_ AtomicUsize, tx: std::sync::mpsc::Sender<_>| {
+            while let Some(&i) = queue.get(next.fetch_add(1, Ordering::Relaxed)) {
+                if tx.send((i, list[i].run(scratch))).is_err() {
+                    break;
+                }
             }
         };
         if !gpu.is_empty() {

@@ -38,6 +38,19 @@ pub type NodalField = Vec<[f64; 2]>;
 /// Fewest steps recorded per submission (the most: [`MAX_BATCH`]).
 pub const MIN_BATCH: u32 = 32;
 
+/// Why the GPU refuses a scene with both failure and contact: its contact surfaces would stay as
+/// meshed while elements erode (the CPU reference follows erosion: `contact::erosion`).
+pub const ERODING_CONTACT: &str = "eroding contact (a material's `failure` in a scene with \
+     `[[contact]]` or `[[rigid_wall]]`) runs on the CPU reference only so far: the GPU erodes \
+     elements but does not yet move its contact surfaces onto the edges they expose; use \
+     --backend cpu";
+
+/// Whether a plan erodes elements and has contact (pairs, groups or rigid walls): a scene whose
+/// contact surfaces must follow erosion, which only the CPU reference does so far.
+pub fn eroding_contact(plan: &Plan) -> bool {
+    plan.has(Stage::Failure) && plan.has(Stage::Contact)
+}
+
 /// Explicit central-difference integration on the GPU (f32).
 #[derive(Debug)]
 pub struct GpuSolver {
@@ -112,6 +125,9 @@ impl GpuSolver {
         fused: Option<bool>,
         contact: ContactOptions,
     ) -> Result<Self> {
+        if eroding_contact(plan) {
+            return Err(Error::Gpu(ERODING_CONTACT.into()));
+        }
         let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let any = |f: &dyn Fn(&crate::model::BodyModel) -> bool| model.bodies.iter().any(f);
         use crate::scene::{ContactMethod, Formulation, HourglassForm, MaterialModel};
