@@ -38,6 +38,9 @@ def test_sigint_leaves_an_interrupted_summary(tmp_path) -> None:
         stderr=subprocess.PIPE,
         text=True,
         env=env,
+        # A shell that started this suite in the background (`cmd &` without job control) left
+        # SIGINT ignored, and Python then installs no Ctrl-C handler in the child: restore it.
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         assert p.stdout is not None
