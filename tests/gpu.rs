@@ -24,8 +24,44 @@ use ricochet::scene::Scene;
 use ricochet::step::cpu::CpuSolver;
 use ricochet::step::Solver;
 
-/// One GPU test at a time: lavapipe shares the machine's two cores.
-static GPU_LOCK: Mutex<()> = Mutex::new(());
+/// GPU tests at a time: one (lavapipe shares the machine's two cores), or `RICOCHET_GPU_TESTS`.
+static GPU_LOCK: GpuLock = GpuLock {
+    busy: Mutex::new(0),
+    free: std::sync::Condvar::new(),
+};
+
+/// A counting lock over the GPU tests ([`GPU_LOCK`]); `lock()` has `Mutex::lock`'s shape.
+struct GpuLock {
+    busy: Mutex<usize>,
+    free: std::sync::Condvar,
+}
+
+/// A GPU test's turn, given back when dropped.
+struct GpuPermit<'a>(&'a GpuLock);
+
+impl GpuLock {
+    fn lock(&self) -> Result<GpuPermit<'_>, std::sync::PoisonError<GpuPermit<'_>>> {
+        let most = std::env::var("RICOCHET_GPU_TESTS")
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok())
+            .unwrap_or(1)
+            .max(1);
+        let mut busy = self.busy.lock().unwrap_or_else(|e| e.into_inner());
+        while *busy >= most {
+            busy = self.free.wait(busy).unwrap_or_else(|e| e.into_inner());
+        }
+        *busy += 1;
+        Ok(GpuPermit(self))
+    }
+}
+
+impl Drop for GpuPermit<'_> {
+    fn drop(&mut self) {
+        let mut busy = self.0.busy.lock().unwrap_or_else(|e| e.into_inner());
+        *busy -= 1;
+        self.0.free.notify_one();
+    }
+}
 
 fn context() -> Option<Arc<GpuContext>> {
     match GpuContext::shared() {
