@@ -190,35 +190,22 @@ mod tests {
             principal_strain: Some(0.1),
             ..Default::default()
         };
-        let stretch = |l: f64| [l, 0.0, 0.0, 1.0];
-        assert!(
-            !check(
-                &principal,
-                &uniaxial,
-                &stretch(1.1),
-                1.0,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-                0.0
-            )
-            .failed
-        );
-        assert!(
+        let fails_at = |l: f64| {
             check(
                 &principal,
                 &uniaxial,
-                &stretch(1.106),
+                &[l, 0.0, 0.0, 1.0],
                 1.0,
                 0.0,
                 0.0,
                 0.0,
                 0.0,
-                0.0
+                0.0,
             )
             .failed
-        );
+        };
+        assert!(!fails_at(1.1));
+        assert!(fails_at(1.106));
         // Rotation leaves the principal strain unchanged.
         let (co, si) = (0.6f64, 0.8f64);
         let rot = [co * 1.2, -si, si * 1.2, co];

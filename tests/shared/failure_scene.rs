@@ -21,7 +21,26 @@ pub fn mu() -> f64 {
 /// `rate` (v_y = rate (y - SIDE / 2), held on the top and bottom edges, v_x = 0) until
 /// `end_time`, its material with `failure`.
 pub fn tension_scene(rate: f64, end_time: f64, failure: &str) -> String {
-    let h = 0.5 * SIDE * rate;
+    one_element(
+        end_time,
+        &format!("hardening_modulus = {HARDENING:e}\n"),
+        failure,
+        &format!("[[0.0, 0.0], [0.0, {rate:e}]]"),
+        ("x", "y", 0.5 * SIDE * rate),
+    )
+}
+
+/// The one-element scene of [`tension_scene`] and [`shear_scene`]: the J2 aluminium (`hardening`:
+/// its hardening line, or none) with `failure`, the initial velocity gradient `gradient`, every
+/// node held at `held` = 0 and the bottom and top edges moved along `moved` at -v and +v
+/// (`(held, moved, v)`).
+fn one_element(
+    end_time: f64,
+    hardening: &str,
+    failure: &str,
+    gradient: &str,
+    (held, moved, v): (&str, &str, f64),
+) -> String {
     format!(
         r#"
 [run]
@@ -36,31 +55,30 @@ density = 2700.0
 youngs_modulus = {E:e}
 poisson_ratio = {NU}
 yield_stress = {YIELD:e}
-hardening_modulus = {HARDENING:e}
-failure = {failure}
+{hardening}failure = {failure}
 
 [[body]]
 name = "block"
 material = "aluminium"
 mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [{SIDE:e}, {SIDE:e}], cells = [1, 1] }} }}
-velocity_gradient = [[0.0, 0.0], [0.0, {rate:e}]]
+velocity_gradient = {gradient}
 
 [[boundary]]
 body = "block"
 region = {{ min = [-1.0, -1.0], max = [1.0, 1.0] }}
-velocity = {{ x = 0.0 }}
+velocity = {{ {held} = 0.0 }}
 
 [[boundary]]
 body = "block"
 region = {{ min = [-1.0, -1e-9], max = [1.0, 1e-9] }}
-velocity = {{ y = {:e} }}
+velocity = {{ {moved} = {:e} }}
 
 [[boundary]]
 body = "block"
 region = {{ min = [-1.0, {top_lo:e}], max = [1.0, {top_hi:e}] }}
-velocity = {{ y = {h:e} }}
+velocity = {{ {moved} = {v:e} }}
 "#,
-        -h,
+        -v,
         hi = end_time / 20.0,
         top_lo = SIDE - 1e-9,
         top_hi = SIDE + 1e-9,
@@ -79,48 +97,12 @@ pub fn tension_plastic_strain(lambda: f64) -> f64 {
 /// every node, v_y = 0): J = 1 exactly, so the mean stress and the triaxiality are 0. Perfect
 /// plasticity (no hardening); its material with `failure`.
 pub fn shear_scene(rate: f64, end_time: f64, failure: &str) -> String {
-    let h = 0.5 * SIDE * rate;
-    format!(
-        r#"
-[run]
-end_time = {end_time:e}
-history_interval = {hi:e}
-bulk_viscosity = {{ linear = 0.0, quadratic = 0.0 }}
-
-[[material]]
-name = "aluminium"
-model = "j2_plastic"
-density = 2700.0
-youngs_modulus = {E:e}
-poisson_ratio = {NU}
-yield_stress = {YIELD:e}
-failure = {failure}
-
-[[body]]
-name = "block"
-material = "aluminium"
-mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [{SIDE:e}, {SIDE:e}], cells = [1, 1] }} }}
-velocity_gradient = [[0.0, {rate:e}], [0.0, 0.0]]
-
-[[boundary]]
-body = "block"
-region = {{ min = [-1.0, -1.0], max = [1.0, 1.0] }}
-velocity = {{ y = 0.0 }}
-
-[[boundary]]
-body = "block"
-region = {{ min = [-1.0, -1e-9], max = [1.0, 1e-9] }}
-velocity = {{ x = {:e} }}
-
-[[boundary]]
-body = "block"
-region = {{ min = [-1.0, {top_lo:e}], max = [1.0, {top_hi:e}] }}
-velocity = {{ x = {h:e} }}
-"#,
-        -h,
-        hi = end_time / 20.0,
-        top_lo = SIDE - 1e-9,
-        top_hi = SIDE + 1e-9,
+    one_element(
+        end_time,
+        "",
+        failure,
+        &format!("[[0.0, {rate:e}], [0.0, 0.0]]"),
+        ("y", "x", 0.5 * SIDE * rate),
     )
 }
 
