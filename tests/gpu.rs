@@ -24,43 +24,167 @@ use ricochet::scene::Scene;
 use ricochet::step::cpu::CpuSolver;
 use ricochet::step::Solver;
 
-/// GPU tests at a time: one (lavapipe shares the machine's two cores), or `RICOCHET_GPU_TESTS`.
-static GPU_LOCK: GpuLock = GpuLock {
-    busy: Mutex::new(0),
-    free: std::sync::Condvar::new(),
-};
+/// GPU tests at a time: two (lavapipe shares the machine's two cores), or `RICOCHET_GPU_TESTS`;
+/// a test that reads what the shared device compiled or allocated for it takes the whole lock
+/// ([`GpuLock::exclusive`]).
+static GPU_LOCK: GpuLock = GpuLock::new();
 
-/// A counting lock over the GPU tests ([`GPU_LOCK`]); `lock()` has `Mutex::lock`'s shape.
+/// GPU tests at a time when `RICOCHET_GPU_TESTS` does not say: two. With two the whole suite
+/// passed in 677 s against 813 s one at a time on the 2-core CI machine (lavapipe, 2026-11-27,
+/// 4842683); a test at a time leaves a core idle in each test's serial parts (setup, the CPU
+/// reference's run, readbacks).
+const DEFAULT_GPU_TESTS: usize = 2;
+
+/// A reader-writer lock over the GPU tests ([`GPU_LOCK`]): `lock()` (with `Mutex::lock`'s shape)
+/// takes one of `RICOCHET_GPU_TESTS` shared turns; `exclusive()` waits for every shared turn to
+/// end and keeps new ones out until it is given back. Tests that look at the kernels and buffers
+/// the shared device holds for them (`GpuSolver::kernels`, `GpuState::allocated`, the context's
+/// `KernelCache`) take the exclusive turn, so that no concurrent test compiles, evicts or
+/// allocates beside them.
 struct GpuLock {
-    busy: Mutex<usize>,
+    turns: Mutex<Turns>,
     free: std::sync::Condvar,
 }
 
+/// Who holds [`GpuLock`].
+struct Turns {
+    /// Shared turns held.
+    busy: usize,
+    /// Whether the exclusive turn is held.
+    exclusive: bool,
+    /// Exclusive turns waiting: new shared turns wait behind them, so that they are not starved.
+    waiting: usize,
+}
+
 /// A GPU test's turn, given back when dropped.
-struct GpuPermit<'a>(&'a GpuLock);
+struct GpuPermit<'a> {
+    lock: &'a GpuLock,
+    exclusive: bool,
+}
 
 impl GpuLock {
+    /// Free: no turn held.
+    const fn new() -> Self {
+        GpuLock {
+            turns: Mutex::new(Turns {
+                busy: 0,
+                exclusive: false,
+                waiting: 0,
+            }),
+            free: std::sync::Condvar::new(),
+        }
+    }
+
+    /// One shared turn, once fewer than `RICOCHET_GPU_TESTS` (default [`DEFAULT_GPU_TESTS`]) are
+    /// held and no exclusive turn is held or waiting.
     fn lock(&self) -> Result<GpuPermit<'_>, std::sync::PoisonError<GpuPermit<'_>>> {
         let most = std::env::var("RICOCHET_GPU_TESTS")
             .ok()
             .and_then(|v| v.parse::<usize>().ok())
-            .unwrap_or(1)
-            .max(1);
-        let mut busy = self.busy.lock().unwrap_or_else(|e| e.into_inner());
-        while *busy >= most {
-            busy = self.free.wait(busy).unwrap_or_else(|e| e.into_inner());
+            .unwrap_or(DEFAULT_GPU_TESTS);
+        Ok(self.shared(most))
+    }
+
+    /// One of `most` (at least one) shared turns, as [`GpuLock::lock`].
+    fn shared(&self, most: usize) -> GpuPermit<'_> {
+        let most = most.max(1);
+        let mut turns = self.turns.lock().unwrap_or_else(|e| e.into_inner());
+        while turns.busy >= most || turns.exclusive || turns.waiting > 0 {
+            turns = self.free.wait(turns).unwrap_or_else(|e| e.into_inner());
         }
-        *busy += 1;
-        Ok(GpuPermit(self))
+        turns.busy += 1;
+        GpuPermit {
+            lock: self,
+            exclusive: false,
+        }
+    }
+
+    /// The whole lock: no other GPU test runs until the permit is dropped.
+    fn exclusive(&self) -> Result<GpuPermit<'_>, std::sync::PoisonError<GpuPermit<'_>>> {
+        let mut turns = self.turns.lock().unwrap_or_else(|e| e.into_inner());
+        turns.waiting += 1;
+        while turns.busy > 0 || turns.exclusive {
+            turns = self.free.wait(turns).unwrap_or_else(|e| e.into_inner());
+        }
+        turns.waiting -= 1;
+        turns.exclusive = true;
+        Ok(GpuPermit {
+            lock: self,
+            exclusive: true,
+        })
+    }
+
+    /// Whether the exclusive turn is held and no shared one.
+    fn held_alone(&self) -> bool {
+        let turns = self.turns.lock().unwrap_or_else(|e| e.into_inner());
+        turns.exclusive && turns.busy == 0
     }
 }
 
 impl Drop for GpuPermit<'_> {
     fn drop(&mut self) {
-        let mut busy = self.0.busy.lock().unwrap_or_else(|e| e.into_inner());
-        *busy -= 1;
-        self.0.free.notify_one();
+        let mut turns = self.lock.turns.lock().unwrap_or_else(|e| e.into_inner());
+        if self.exclusive {
+            turns.exclusive = false;
+        } else {
+            turns.busy -= 1;
+        }
+        self.lock.free.notify_all();
     }
+}
+
+/// The GPU lock's turns under contention (no GPU needed): never more than `most` shared turns at
+/// once, none beside an exclusive one, and every exclusive turn granted although shared turns
+/// keep coming (they queue behind a waiting exclusive turn).
+#[test]
+fn gpu_lock_gives_exclusive_turns_alone_and_at_most_n_shared_ones() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::time::Duration;
+    let lock = GpuLock::new();
+    let shared = AtomicUsize::new(0);
+    let most_shared = AtomicUsize::new(0);
+    let exclusive = AtomicUsize::new(0);
+    let exclusive_turns = AtomicUsize::new(0);
+    std::thread::scope(|s| {
+        for _ in 0..4 {
+            s.spawn(|| {
+                for _ in 0..60 {
+                    let _p = lock.shared(2);
+                    let now = shared.fetch_add(1, Ordering::SeqCst) + 1;
+                    most_shared.fetch_max(now, Ordering::SeqCst);
+                    assert!(now <= 2, "{now} shared turns at once");
+                    assert_eq!(
+                        exclusive.load(Ordering::SeqCst),
+                        0,
+                        "shared beside exclusive"
+                    );
+                    std::thread::sleep(Duration::from_micros(300));
+                    shared.fetch_sub(1, Ordering::SeqCst);
+                }
+            });
+        }
+        for _ in 0..2 {
+            s.spawn(|| {
+                for _ in 0..10 {
+                    let _p = lock.exclusive().unwrap_or_else(|e| e.into_inner());
+                    assert!(lock.held_alone());
+                    assert_eq!(exclusive.fetch_add(1, Ordering::SeqCst), 0, "two exclusive");
+                    assert_eq!(shared.load(Ordering::SeqCst), 0, "exclusive beside shared");
+                    std::thread::sleep(Duration::from_micros(500));
+                    assert_eq!(shared.load(Ordering::SeqCst), 0, "shared came in");
+                    exclusive.fetch_sub(1, Ordering::SeqCst);
+                    exclusive_turns.fetch_add(1, Ordering::SeqCst);
+                }
+            });
+        }
+    });
+    assert_eq!(exclusive_turns.load(Ordering::SeqCst), 20);
+    assert_eq!(
+        most_shared.load(Ordering::SeqCst),
+        2,
+        "two shared turns overlapped"
+    );
+    assert!(!lock.held_alone());
 }
 
 fn context() -> Option<Arc<GpuContext>> {
@@ -74,6 +198,16 @@ fn context() -> Option<Arc<GpuContext>> {
             None
         }
     }
+}
+
+/// A folder under the temporary folder for one run's outputs, `ricochet-{what}-{pid}-{n}` with `n`
+/// counting up in this process: two GPU tests run at once, and two helpers called with the same
+/// name (`both(.., "rods", ..)` in two tests) would otherwise write into one folder, which the
+/// output lock refuses to the second (`InUse`).
+fn scratch(what: &str) -> std::path::PathBuf {
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    std::env::temp_dir().join(format!("ricochet-{what}-{}-{n}", std::process::id()))
 }
 
 fn load(text: &str, name: &str) -> (Scene, Model, Plan) {
@@ -547,7 +681,7 @@ fn both(
     u64,
 ) {
     let (scene, model, plan) = load(text, name);
-    let dir = std::env::temp_dir().join(format!("ricochet-gpu-{}-{name}", std::process::id()));
+    let dir = scratch(&format!("gpu-{name}"));
     let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
     let rc = run(&scene, &model, &plan, &mut cpu, &dir.join("cpu"), None).expect("cpu run");
     assert_eq!(rc.summary.status, "completed", "{}", rc.summary.message);
@@ -571,7 +705,7 @@ fn both(
 /// compared with the first).
 fn gpu_samples(ctx: Arc<GpuContext>, text: &str, name: &str) -> Vec<ricochet::step::Sample> {
     let (scene, model, plan) = load(text, name);
-    let dir = std::env::temp_dir().join(format!("ricochet-gpu-{}-{name}-2", std::process::id()));
+    let dir = scratch(&format!("gpu-{name}-2"));
     let mut gpu =
         GpuSolver::with_reductions(ctx, &model, &plan, schedule(&scene), None).expect("gpu solver");
     let rg = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("gpu run");
@@ -1126,7 +1260,7 @@ fn parity_pressure_load_with_mass_damping() {
 #[test]
 fn pressure_and_damping_compile_their_kernels_only_when_used() {
     let Some(ctx) = context() else { return };
-    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU_LOCK.exclusive().unwrap_or_else(|e| e.into_inner());
     for (pressure, damping) in [(false, false), (true, false), (false, true), (true, true)] {
         let (scene, model, plan) = load(&loaded_block(pressure, damping), "loads");
         let gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu solver");

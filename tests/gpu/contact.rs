@@ -11,7 +11,7 @@ use ricochet::run::{run, schedule, RunResult};
 use ricochet::step::cpu::CpuSolver;
 use ricochet::step::Sample;
 
-use crate::{asset, context, load, GPU_LOCK};
+use crate::{asset, context, load, scratch, GPU_LOCK};
 
 #[path = "../shared/contact_scenes.rs"]
 mod scenes;
@@ -19,11 +19,7 @@ use scenes::*;
 
 fn run_on(ctx: Option<Arc<GpuContext>>, text: &str, name: &str) -> (RunResult, Model) {
     let (scene, model, plan) = load(text, name);
-    let dir = std::env::temp_dir().join(format!(
-        "ricochet-gpu-contact-{}-{name}-{}",
-        std::process::id(),
-        ctx.is_some()
-    ));
+    let dir = scratch(&format!("gpu-contact-{name}-{}", ctx.is_some()));
     let r = match ctx {
         Some(ctx) => {
             let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
@@ -433,7 +429,7 @@ fn gpu_contact_runs_are_bit_identical_run_to_run() {
 #[test]
 fn gpu_allocates_contact_buffers_and_kernel_only_for_contact_scenes() {
     let Some(ctx) = context() else { return };
-    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU_LOCK.exclusive().unwrap_or_else(|e| e.into_inner());
     let with = rod_scene(20, None, "lagrange", "", 1.5);
     // The same rod without the wall.
     let cut = with.find("[[rigid_wall]]").expect("wall section");

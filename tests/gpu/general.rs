@@ -17,10 +17,7 @@ mod general_checks;
 use general_checks::{check_pile, check_ring, most_active, PILE_H};
 
 fn tmp_dir(name: &str) -> std::path::PathBuf {
-    std::env::temp_dir().join(format!(
-        "ricochet-gpu-general-{name}-{}",
-        std::process::id()
-    ))
+    crate::scratch(&format!("gpu-general-{name}"))
 }
 
 /// Runs scene text on the GPU (the solve path chosen by `multi`, or by size); the result, the

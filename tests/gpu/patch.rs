@@ -29,10 +29,7 @@ fn settle(gpu: bool, lower: usize, upper: usize, first: &str, contact: &str) -> 
     let (scene, model, plan) = load(&text, "patch");
     assert!(plan.has(Stage::Pressure) && plan.has(Stage::MassDamping));
     let sign = if first == "upper" { 1.0 } else { -1.0 };
-    let dir = std::env::temp_dir().join(format!(
-        "ricochet-gpu-patch-{}-{lower}-{upper}-{first}-{gpu}",
-        std::process::id()
-    ));
+    let dir = crate::scratch(&format!("gpu-patch-{lower}-{upper}-{first}-{gpu}"));
     let (r, displacement) = if gpu {
         let ctx = context().expect("adapter");
         let mut s = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");

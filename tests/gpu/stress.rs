@@ -31,8 +31,7 @@ fn run_gpu(text: &str, name: &str) -> Option<(RunResult, ricochet::model::Model)
 fn run_gpu_u(text: &str, name: &str) -> Option<(RunResult, ricochet::model::Model, Vec<[f64; 2]>)> {
     let ctx = context()?;
     let (scene, model, plan) = load(text, name);
-    let dir =
-        std::env::temp_dir().join(format!("ricochet-gpu-stress-{}-{name}", std::process::id()));
+    let dir = crate::scratch(&format!("gpu-stress-{name}"));
     let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
     let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("gpu run");
     let u = gpu.displacement_now().expect("displacement");
