@@ -249,23 +249,41 @@ fn running_uniform(l: u32) -> bool {
 var<workgroup> sh_prefix: array<u32, SG>;
 var<workgroup> sh_total: u32;
 
-// The exclusive prefix of the lanes' `x` in lane order (lane 0 adds them up in turn: the same on
-// every run) for lane l; their total in sh_total after the call. Every lane of a one-workgroup
-// kernel calls it, in uniform control flow.
+// The exclusive prefix of the lanes' `x` in lane order for lane l; their total in sh_total after
+// the call. Integer sums, so the same on every run and either way: up to 32 lanes lane 0 adds them
+// up in turn (on CPU adapters each barrier switches between lane groups), more by Hillis-Steele
+// steps (log2 SG barrier pairs instead of SG dependent steps in one lane). Every lane of a
+// one-workgroup kernel calls it, in uniform control flow.
 fn workgroup_prefix(l: u32, x: u32) -> u32 {
     sh_prefix[l] = x;
     workgroupBarrier();
-    if (l == 0u) {
-        var acc = 0u;
-        for (var t = 0u; t < SG; t++) {
-            let y = sh_prefix[t];
-            sh_prefix[t] = acc;
-            acc += y;
+    if (SG <= 32u) {
+        if (l == 0u) {
+            var acc = 0u;
+            for (var t = 0u; t < SG; t++) {
+                let y = sh_prefix[t];
+                sh_prefix[t] = acc;
+                acc += y;
+            }
+            sh_total = acc;
         }
-        sh_total = acc;
+        workgroupBarrier();
+        return sh_prefix[l];
+    }
+    var v = x;
+    for (var d = 1u; d < SG; d <<= 1u) {
+        if (l >= d) {
+            v += sh_prefix[l - d];
+        }
+        workgroupBarrier();
+        sh_prefix[l] = v;
+        workgroupBarrier();
+    }
+    if (l == SG - 1u) {
+        sh_total = v;
     }
     workgroupBarrier();
-    return sh_prefix[l];
+    return v - x;
 }
 
 // 1 / (1 + c): mass damping makes the update's masses (1 + c) m (see Control.damp_c).

@@ -77,8 +77,11 @@ fn mark_node(i: u32, c: u32) {
 
 // The step's Lagrange constraints coloured greedily in slot order by their own nodes (slave and
 // segment ends), as on the CPU reference's search, and gathered by colour into ws[o_act..]
-// (sh_off: offsets): sequential in invocation 0, so the same on every run. A constraint that
-// finds all 32 colours taken goes to the serial colour, which invocation 0 sweeps alone.
+// (sh_off: offsets); their nodes listed in ws[o_nlist..] (sh_nn) in the order of their first
+// appearance. The same on every run: up to CAP constraints by `compact_local` (the greedy loop
+// alone sequential, on workgroup memory), more by `compact_global` (all of it in invocation 0).
+// A constraint that finds all 32 colours taken goes to the serial colour, which invocation 0
+// sweeps alone.
 fn compact(l: u32) {
     // The Lagrange slots in slot order into ws[o_color..]: each invocation a contiguous chunk
     // of the active slots, offsets by a prefix over the invocations.
@@ -101,9 +104,153 @@ fn compact(l: u32) {
         }
     }
     storageBarrier();
+    let na = workgroupUniformLoad(&sh_total);
+    if (na <= CAP) {
+        compact_local(l, na);
+    } else {
+        compact_global(l, na);
+    }
+}
+
+// Constraints `compact_local` holds in workgroup memory, 28 bytes each (host-set from the
+// device's workgroup storage: crate::gpu::contact::local_constraints).
+const CAP: u32 = 1024u;
+const CAP_SIZE: u32 = 1024u;    // CAP, at least 1 (the arrays' size)
+// Per reference 3j + t of constraint j (slave, segment ends): its node (NONE for a wall's
+// missing segment), then the key of that node, its first reference.
+var<workgroup> sh_ref: array<u32, 3u * CAP_SIZE>;
+// Per reference: the least reference to the same node; then, per key, the node's colour mask.
+var<workgroup> sh_key: array<atomic<u32>, 3u * CAP_SIZE>;
+// Per constraint: its colour (6 bits) and its rank among the constraints of that colour.
+var<workgroup> sh_cr: array<u32, CAP_SIZE>;
+
+// The node of reference t (0 slave, 1 and 2 segment ends) of constraint slot k.
+fn ref_node(k: u32, t: u32) -> u32 {
+    if (t == 0u) {
+        return slots[k].s;
+    }
+    if (t == 1u) {
+        return cons[k].a;
+    }
+    return cons[k].b;
+}
+
+// `compact` for na <= CAP constraints, with the result of `compact_global` (the same colours,
+// the same order by colour, the same node list). Each node's references are first tied together
+// through ws[o_mask + i] (every reference writes its own index there; whichever write stays, all
+// references of the node read the same one, and the least reference to the node, found by an
+// integer atomicMin, does not depend on which), so that the greedy loop reads and writes the
+// colour masks in workgroup memory by key; the nodes are listed by a scan over the references
+// that are their node's first.
+fn compact_local(l: u32, na: u32) {
+    let nr = 3u * na;
+    for (var r = l; r < nr; r += SG) {
+        let i = ref_node(ws[cc.p.o_color + r / 3u], r % 3u);
+        sh_ref[r] = i;
+        atomicStore(&sh_key[r], NONE);
+        if (i != NONE) {
+            ws[cc.p.o_mask + i] = r;
+        }
+    }
+    storageBarrier();
+    workgroupBarrier();
+    for (var r = l; r < nr; r += SG) {
+        let i = sh_ref[r];
+        if (i != NONE) {
+            atomicMin(&sh_key[ws[cc.p.o_mask + i]], r);
+        }
+    }
+    workgroupBarrier();
+    // Keys, and the nodes listed by their first reference: each invocation a contiguous chunk.
+    let chunk = (nr + SG - 1u) / SG;
+    let begin = min(l * chunk, nr);
+    let end = min(begin + chunk, nr);
+    var firsts = 0u;
+    for (var r = begin; r < end; r++) {
+        let i = sh_ref[r];
+        if (i != NONE && atomicLoad(&sh_key[ws[cc.p.o_mask + i]]) == r) {
+            firsts += 1u;
+        }
+    }
+    var at = workgroup_prefix(l, firsts);
+    for (var r = begin; r < end; r++) {
+        let i = sh_ref[r];
+        var key = NONE;
+        if (i != NONE) {
+            key = atomicLoad(&sh_key[ws[cc.p.o_mask + i]]);
+            if (key == r) {
+                ws[cc.p.o_nlist + at] = i;
+                at += 1u;
+            }
+        }
+        sh_ref[r] = key;
+    }
+    if (l == 0u) {
+        sh_nn = sh_total;
+    }
+    workgroupBarrier();
+    for (var r = l; r < nr; r += SG) {
+        atomicStore(&sh_key[r], 0u);
+    }
     workgroupBarrier();
     if (l == 0u) {
-        let na = sh_total;
+        var count: array<u32, 33>;
+        for (var c = 0u; c <= SERIAL; c++) {
+            count[c] = 0u;
+        }
+        for (var j = 0u; j < na; j++) {
+            let k0 = sh_ref[3u * j];
+            let k1 = sh_ref[3u * j + 1u];
+            let k2 = sh_ref[3u * j + 2u];
+            var used = 0u;
+            if (k0 != NONE) {
+                used |= atomicLoad(&sh_key[k0]);
+            }
+            if (k1 != NONE) {
+                used |= atomicLoad(&sh_key[k1]);
+            }
+            if (k2 != NONE) {
+                used |= atomicLoad(&sh_key[k2]);
+            }
+            var col = SERIAL;
+            if (used != 0xffffffffu) {
+                col = firstTrailingBit(~used);
+            }
+            // (A serial constraint marks its nodes with colour 31 only to list them: a later
+            // constraint on them then avoids colour 31, which changes nothing else.)
+            let bit = 1u << min(col, 31u);
+            if (k0 != NONE) {
+                atomicOr(&sh_key[k0], bit);
+            }
+            if (k1 != NONE) {
+                atomicOr(&sh_key[k1], bit);
+            }
+            if (k2 != NONE) {
+                atomicOr(&sh_key[k2], bit);
+            }
+            sh_cr[j] = col | (count[col] << 6u);
+            count[col] += 1u;
+        }
+        var acc = 0u;
+        for (var c = 0u; c <= SERIAL; c++) {
+            sh_off[c] = acc;
+            acc += count[c];
+        }
+        sh_off[SERIAL + 1u] = acc;
+    }
+    workgroupBarrier();
+    for (var j = l; j < na; j += SG) {
+        let cr = sh_cr[j];
+        ws[cc.p.o_act + sh_off[cr & 63u] + (cr >> 6u)] = ws[cc.p.o_color + j];
+    }
+    storageBarrier();
+    workgroupBarrier();
+}
+
+// `compact` for more than CAP constraints: sequential in invocation 0, on the colour masks of
+// the nodes in ws[o_mask..] (zero on entry, cleared again by `unpack`).
+fn compact_global(l: u32, na: u32) {
+    if (l == 0u) {
         sh_nn = 0u;
         var count: array<u32, 33>;
         for (var c = 0u; c <= SERIAL; c++) {
@@ -136,7 +283,6 @@ fn compact(l: u32) {
         sh_off[SERIAL + 1u] = acc;
         for (var j = 0u; j < na; j++) {
             let k = ws[cc.p.o_color + j];
-            let c = cons[k];
             let col = ws[cc.p.o_list + j];
             ws[cc.p.o_act + sh_off[col] + count[col]] = k;
             count[col] += 1u;

@@ -47,6 +47,10 @@ pub struct Features {
     /// one-workgroup Lagrange solve, the reports' end): 256 on GPUs, 8 on CPU adapters
     /// ([`crate::gpu::contact::one_group`]).
     pub contact_group: u32,
+    /// Lagrange constraints the one-workgroup solve compacts and colours in workgroup memory
+    /// (WGSL `CAP`; more take the slower path through storage, with the same result), from the
+    /// device's workgroup storage ([`crate::gpu::contact::local_constraints`]).
+    pub contact_cap: u32,
 }
 
 impl Default for Features {
@@ -66,6 +70,10 @@ impl Default for Features {
             contact_friction: true,
             reduce_group: 256,
             contact_group: 256,
+            contact_cap: crate::gpu::contact::local_constraints(
+                wgpu::Limits::default().max_compute_workgroup_storage_size,
+                256,
+            ),
         }
     }
 }
@@ -115,6 +123,10 @@ impl Features {
                                     contact_friction: elastic,
                                     reduce_group,
                                     contact_group,
+                                    contact_cap: crate::gpu::contact::local_constraints(
+                                        wgpu::Limits::default().max_compute_workgroup_storage_size,
+                                        contact_group,
+                                    ),
                                 });
                             }
                         }
@@ -156,6 +168,15 @@ pub fn source(kernel: &str, features: Features) -> String {
         if *keep.last().unwrap_or(&true) {
             if t == "const RG: u32 = 256u;" {
                 out.push_str(&format!("const RG: u32 = {}u;\n", features.reduce_group));
+                continue;
+            }
+            if t == "const CAP: u32 = 1024u;" {
+                out.push_str(&format!("const CAP: u32 = {}u;\n", features.contact_cap));
+                continue;
+            }
+            if t.starts_with("const CAP_SIZE: u32 = 1024u;") {
+                let size = features.contact_cap.max(1);
+                out.push_str(&format!("const CAP_SIZE: u32 = {size}u;\n"));
                 continue;
             }
             if t == "const SG: u32 = 256u;" {

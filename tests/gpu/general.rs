@@ -371,6 +371,42 @@ fn gpu_split_rechecks_match_the_one_workgroup_solve() {
     }
 }
 
+/// The one-workgroup solve's compaction in workgroup memory (`compact_local`, the default up to
+/// `local_constraints` of the device) against the compaction through storage
+/// (`compact_global`, `compact_local: Some(0)`), and with bounds of 8 and 32 constraints that send
+/// the striker's first contact steps one way and its later ones the other: the same colours, the
+/// same order by colour and the same node list, so the same bits on every adapter.
+#[test]
+fn gpu_compaction_in_workgroup_memory_gives_the_bits_of_the_one_through_storage() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let striker = asset("stress/striker_plate_gpu_energy.toml");
+    let with = |local: Option<u32>| ContactOptions {
+        multi: Some(false),
+        compact_local: local,
+        ..ContactOptions::default()
+    };
+    let (r0, _, u0, _) = run_gpu_with(&ctx, &striker, "compact-storage", with(Some(0)));
+    assert!(r0.summary.contact_sweeps_max > 0, "the solve ran");
+    for local in [None, Some(8), Some(32)] {
+        let (r, _, u, _) = run_gpu_with(&ctx, &striker, "compact-local", with(local));
+        println!(
+            "compaction in workgroup memory up to {local:?}: sweeps mean {:.3} (through storage \
+             {:.3})",
+            r.summary.contact_sweeps_mean, r0.summary.contact_sweeps_mean
+        );
+        assert_same_bits(
+            (&r, &u),
+            (&r0, &u0),
+            &format!("compaction in workgroup memory up to {local:?} and through storage differ"),
+        );
+        assert_eq!(
+            r.summary.contact_sweeps_mean.to_bits(),
+            r0.summary.contact_sweeps_mean.to_bits()
+        );
+    }
+}
+
 /// The contact stage in one workgroup before the search and one after it (the CPU adapters' path
 /// for small contact sets, `contact::one`) against the per-item kernels, on the pile (Lagrange
 /// between the disks and on the wall), on the pile with Coulomb friction and a penalty wall (the

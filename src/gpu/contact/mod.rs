@@ -34,7 +34,7 @@ pub mod tables;
 
 pub use kernels::{stage_source, ContactKernels, MODULES};
 pub(crate) use options::Path;
-pub use options::{one_group, ContactOptions};
+pub use options::{local_constraints, one_group, ContactOptions};
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;

@@ -131,6 +131,16 @@ impl GpuSolver {
         let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let any = |f: &dyn Fn(&crate::model::BodyModel) -> bool| model.bodies.iter().any(f);
         use crate::scene::{ContactMethod, Formulation, HourglassForm, MaterialModel};
+        let contact_group = contact
+            .group
+            .unwrap_or_else(|| super::contact::one_group(ctx.info.device_type));
+        let contact_cap = super::contact::local_constraints(
+            ctx.device.limits().max_compute_workgroup_storage_size,
+            contact_group,
+        );
+        let contact_cap = contact
+            .compact_local
+            .map_or(contact_cap, |c| c.min(contact_cap));
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -155,9 +165,8 @@ impl GpuSolver {
             contact_friction: model.contacts.iter().any(|c| c.friction > 0.0)
                 || model.walls.iter().any(|w| w.friction > 0.0),
             reduce_group: if cpu_adapter { 64 } else { 256 },
-            contact_group: contact
-                .group
-                .unwrap_or_else(|| super::contact::one_group(ctx.info.device_type)),
+            contact_group,
+            contact_cap,
         };
         if !(8..=256).contains(&features.contact_group) || !features.contact_group.is_power_of_two()
         {
