@@ -185,7 +185,7 @@ impl GpuContext {
         limits.max_buffer_size = al.max_buffer_size;
         limits.max_compute_workgroups_per_dimension = al.max_compute_workgroups_per_dimension;
         // The one-workgroup contact solve keeps as much of its work in workgroup memory as fits
-        // (crate::gpu::contact::local_constraints).
+        // (crate::gpu::shader::local_constraints).
         limits.max_compute_workgroup_storage_size = al.max_compute_workgroup_storage_size;
         let features = if timestamps {
             wgpu::Features::TIMESTAMP_QUERY

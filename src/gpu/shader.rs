@@ -49,8 +49,24 @@ pub struct Features {
     pub contact_group: u32,
     /// Lagrange constraints the one-workgroup solve compacts and colours in workgroup memory
     /// (WGSL `CAP`; more take the slower path through storage, with the same result), from the
-    /// device's workgroup storage ([`crate::gpu::contact::local_constraints`]).
+    /// device's workgroup storage ([`local_constraints`]).
     pub contact_cap: u32,
+}
+
+/// Threads per workgroup of the per-item contact kernels (`crate::gpu::contact::CG`).
+pub const ITEM_GROUP: u32 = 64;
+
+/// Lagrange constraints the one-workgroup solve compacts and colours in workgroup memory (WGSL
+/// `CAP`, 28 bytes each) on a device with `storage` bytes of workgroup storage and the
+/// one-workgroup kernels at `group` threads: what the other workgroup arrays of the contact
+/// kernels leave (at most 40 bytes per thread of `group`, 16 per thread of the per-item kernels,
+/// and 1 KiB), in multiples of 32, from 32 to 2048. A step with more takes the compaction in
+/// storage, whose greedy loop waits for the memory at every dependent load in one invocation:
+/// on an NVIDIA H200 (2026-11-27, BENCHMARKS.md) the striker's solve took 2.1 x (10^5 elements)
+/// and 2.5 x (10^6) as long that way.
+pub fn local_constraints(storage: u32, group: u32) -> u32 {
+    let others = 40 * group + 16 * ITEM_GROUP + 1024;
+    (storage.saturating_sub(others) / 28 / 32 * 32).clamp(32, 2048)
 }
 
 impl Default for Features {
@@ -70,7 +86,7 @@ impl Default for Features {
             contact_friction: true,
             reduce_group: 256,
             contact_group: 256,
-            contact_cap: crate::gpu::contact::local_constraints(
+            contact_cap: local_constraints(
                 wgpu::Limits::default().max_compute_workgroup_storage_size,
                 256,
             ),
@@ -123,7 +139,7 @@ impl Features {
                                     contact_friction: elastic,
                                     reduce_group,
                                     contact_group,
-                                    contact_cap: crate::gpu::contact::local_constraints(
+                                    contact_cap: local_constraints(
                                         wgpu::Limits::default().max_compute_workgroup_storage_size,
                                         contact_group,
                                     ),

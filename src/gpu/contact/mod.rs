@@ -32,9 +32,10 @@ pub mod search;
 pub mod solve;
 pub mod tables;
 
+pub use crate::gpu::shader::local_constraints;
 pub use kernels::{stage_source, ContactKernels, MODULES};
 pub(crate) use options::Path;
-pub use options::{local_constraints, one_group, ContactOptions};
+pub use options::{one_group, ContactOptions};
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;

@@ -40,8 +40,8 @@ pub struct ContactOptions {
     /// colour); only the reports' float sums change order.
     pub group: Option<u32>,
     /// Lagrange constraints the one-workgroup solve compacts in workgroup memory, at most
-    /// [`local_constraints`] of the device (`Some(0)`: every compaction through storage);
-    /// `None`: [`local_constraints`]. The same bits at every size.
+    /// [`super::local_constraints`] of the device (`Some(0)`: every compaction through storage);
+    /// `None`: [`super::local_constraints`]. The same bits at every size.
     pub compact_local: Option<u32>,
 }
 
@@ -57,18 +57,9 @@ pub fn one_group(device_type: wgpu::DeviceType) -> u32 {
     }
 }
 
-/// Lagrange constraints the one-workgroup solve compacts and colours in workgroup memory (WGSL
-/// `CAP`, 28 bytes each) on a device with `storage` bytes of workgroup storage and the
-/// one-workgroup kernels at `group` threads: what the other workgroup arrays of the contact
-/// kernels leave (at most 40 bytes per thread of `group`, 16 per thread of the per-item kernels,
-/// and 1 KiB), in multiples of 32, from 32 to 2048. A step with more takes the compaction in
-/// storage, whose greedy loop waits for the memory at every dependent load in one invocation:
-/// on an NVIDIA H200 (2026-11-27, BENCHMARKS.md) the striker's solve took 2.1 x (10^5 elements)
-/// and 2.5 x (10^6) as long that way.
-pub fn local_constraints(storage: u32, group: u32) -> u32 {
-    let others = 40 * group + 16 * super::CG + 1024;
-    (storage.saturating_sub(others) / 28 / 32 * 32).clamp(32, 2048)
-}
+// `local_constraints` (in `shader`, whose `Features` default needs it) reserves room for the
+// per-item kernels' workgroups of this many threads.
+const _: () = assert!(super::CG == crate::gpu::shader::ITEM_GROUP);
 
 /// How a scene's contact stage is solved and dispatched.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
