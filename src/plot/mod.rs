@@ -197,7 +197,9 @@ fn run_label(dir: &Path) -> String {
 }
 
 /// Encodes an RGB buffer of `size` as a PNG file.
-fn write_png(path: &Path, size: (u32, u32), rgb: &[u8]) -> Result<()> {
+/// Writes `rgb` (8-bit RGB rows of `size`) as a PNG file at `path` (also the verification
+/// suite's plots: plotters draws into a buffer and this encodes it, so no image codec is built).
+pub(crate) fn write_png(path: &Path, size: (u32, u32), rgb: &[u8]) -> Result<()> {
     let file = File::create(path).map_err(|source| Error::Write {
         path: path.to_path_buf(),
         source,
@@ -211,7 +213,7 @@ fn write_png(path: &Path, size: (u32, u32), rgb: &[u8]) -> Result<()> {
 }
 
 /// Draws with `f` into an RGB buffer of `size` (white first).
-fn raster(
+pub(crate) fn raster(
     size: (u32, u32),
     path: &Path,
     f: impl FnOnce(

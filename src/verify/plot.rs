@@ -56,26 +56,22 @@ pub fn error_vs_time(dir: &Path, case: &Case, rows: &[Row]) -> Result<()> {
     let svg = dir.join(format!("{}.svg", case.case.name));
     let png = dir.join(format!("{}.png", case.case.name));
     draw(
-        SVGBackend::new(&svg, (900, 600)).into_drawing_area(),
+        &SVGBackend::new(&svg, SIZE).into_drawing_area(),
         &title,
         &metric,
         &series,
         k,
     )
     .map_err(draw_err)?;
-    draw(
-        BitMapBackend::new(&png, (900, 600)).into_drawing_area(),
-        &title,
-        &metric,
-        &series,
-        k,
-    )
-    .map_err(draw_err)?;
-    Ok(())
+    let rgb = crate::plot::raster(SIZE, &png, |root| draw(root, &title, &metric, &series, k))?;
+    crate::plot::write_png(&png, SIZE, &rgb)
 }
 
+/// Pixels of each plot.
+const SIZE: (u32, u32) = (900, 600);
+
 fn draw<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
+    root: &DrawingArea<DB, Shift>,
     title: &str,
     metric: &str,
     series: &[Series],
@@ -96,7 +92,7 @@ fn draw<DB: DrawingBackend>(
     }
     let (x0, x1) = (x0 / 2.0, x1 * 2.0);
     let (y0, y1) = (y0 / 5.0, y1 * 5.0);
-    let mut chart = ChartBuilder::on(&root)
+    let mut chart = ChartBuilder::on(root)
         .caption(title, ("sans-serif", 22))
         .margin(20)
         .x_label_area_size(50)
