@@ -80,6 +80,9 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         s.max_energy_error,
         out.display()
     );
+    if let Some(t) = s.max_temperature {
+        println!("thermal softening: highest element temperature {t:.1} K at the end");
+    }
     if s.contact_searches > 0 {
         println!(
             "contact: {} broad-phase searches in {} steps",

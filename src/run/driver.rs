@@ -180,6 +180,7 @@ pub fn run_with(
             scene,
             plan,
             solver,
+            None,
             "running",
             String::new(),
             0.0,
@@ -328,10 +329,13 @@ pub fn run_with(
     } else {
         "completed"
     };
+    // (A device lost by now already failed the run: the summary says so without it.)
+    let max_temperature = max_temperature(model, solver).unwrap_or_default();
     let summary = summary_now(
         scene,
         plan,
         solver,
+        max_temperature,
         status,
         failure.or(interrupted).unwrap_or_default(),
         loop_seconds,
@@ -353,12 +357,31 @@ fn write_summary(out_dir: &Path, summary: &Summary) -> Result<()> {
     write_file(&out_dir.join("summary.json"), &(json + "\n"))
 }
 
-/// The summary of `solver`'s run so far.
+/// The highest temperature of the elements of `model`'s bodies with Johnson-Cook thermal
+/// softening now (K; `None` without: no readback then).
+fn max_temperature(model: &Model, solver: &mut dyn Solver) -> Result<Option<f64>> {
+    if !model.bodies.iter().any(|b| b.params.has_thermal()) {
+        return Ok(None);
+    }
+    let plastic = solver.plastic_now()?;
+    let mut max = f64::NEG_INFINITY;
+    for b in model.bodies.iter().filter(|b| b.params.has_thermal()) {
+        for e in b.elements.clone() {
+            let heat = plastic.get(e).map_or(0.0, |p| p.heat);
+            max = max.max(b.params.room_temperature + heat);
+        }
+    }
+    Ok(max.is_finite().then_some(max))
+}
+
+/// The summary of `solver`'s run so far (`max_temperature`: the highest element temperature,
+/// for a scene with thermal softening).
 #[allow(clippy::too_many_arguments)]
 fn summary_now(
     scene: &Scene,
     plan: &Plan,
     solver: &dyn Solver,
+    max_temperature: Option<f64>,
     status: &str,
     message: String,
     loop_seconds: f64,
@@ -406,6 +429,15 @@ fn summary_now(
             .iter()
             .filter_map(|m| Some(format!("{}: {}", m.name, m.failure?.describe())))
             .collect(),
+        thermal: scene
+            .materials
+            .iter()
+            .filter_map(|m| {
+                let t = m.plasticity?.johnson_cook?.thermal?;
+                Some(format!("{}: {}", m.name, t.describe()))
+            })
+            .collect(),
+        max_temperature,
         eroded_elements: plan
             .has(crate::plan::Stage::Failure)
             .then_some(counters.eroded_elements),

@@ -78,7 +78,7 @@ impl Erosion {
             out.plastic.alpha,
             dt,
             damage,
-            0.0,
+            model.params(e).t_star(out.plastic.heat),
         );
         if let Some(d) = self.damage.get_mut(e) {
             *d = check.damage;

@@ -154,6 +154,7 @@ impl GpuSolver {
             plane_stress: any(&|b| b.params.formulation == Formulation::PlaneStress),
             hourglass_stiffness: any(&|b| b.params.hourglass == HourglassForm::Stiffness),
             failure: plan.has(Stage::Failure),
+            thermal: any(&|b| b.params.has_thermal()),
             contact_springs: model
                 .contacts
                 .iter()

@@ -73,7 +73,7 @@ impl GpuSolver {
     }
 
     /// The plastic state of every element (empty without a plastic body): C_p^-1 = I + the
-    /// stored deviation, and alpha.
+    /// stored deviation, alpha and the temperature rise (0 without thermal softening).
     pub(super) fn plastic_state(&mut self) -> Result<Vec<PlasticState>> {
         let Some(buf) = self.state.plastic.clone() else {
             return Ok(Vec::new());
@@ -92,6 +92,7 @@ impl GpuSolver {
                         1.0 + d[3] as f64,
                     ],
                     alpha: f[8 * e + 4] as f64,
+                    heat: f[8 * e + 6] as f64,
                 }
             })
             .collect())
