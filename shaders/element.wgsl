@@ -10,7 +10,9 @@
 // Material failure (`//#if failure`, scenes with a material's `failure` only): the criteria of
 // ricochet::element::failure checked after the stress update, in the CPU's order and with its
 // floors; an element that fails erodes at once (ricochet::step::cpu's element stage): no force,
-// no stable step and no inversion check from that step on, its mass left on its nodes.
+// no stable step and no inversion check from that step on, its mass left on its nodes; with
+// run.erosion.inverted (which compiles the failure part too) an element about to invert erodes
+// the same way instead of stopping the run.
 // Johnson-Cook thermal softening with adiabatic heating (`//#if thermal`, scenes with a material's
 // `m` only): the temperature rise in the plastic state's third word of its second vec4, the flow
 // stress times 1 - T*^m at the start of the step's temperature (held through the return), the
@@ -57,7 +59,7 @@ struct Failure {
     d4: f32,
     d5: f32,
     rate0: f32,
-    _p0: u32,
+    inverted: u32,        // 1: an element about to invert erodes (run.erosion.inverted; every body)
     _p1: u32,
 }
 
@@ -108,7 +110,7 @@ override WG: u32 = 64u;
 //#endif
 //#if failure
 @group(0) @binding(11) var<storage, read> failures: array<Failure>;   // per body
-// Per element: (eroded energy, 1 once eroded, Johnson-Cook damage, 0).
+// Per element: (eroded energy, 1 once eroded, Johnson-Cook damage, 1 if eroded about to invert).
 @group(0) @binding(12) var<storage, read_write> erosion: array<vec4<f32>>;
 //#endif
 
@@ -686,16 +688,25 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 //#if failure
     let fp = failures[el.body];
+    var damage = eroding.z;
+    var failed = false;
     if (fp.flags != 0u) {
         let check = failure_check(fp, cauchy, f, hoop_stretch, alpha_old, alpha_new, ctrl.dt_prev, eroding.z, t_star);
-        if (check.y != 0.0) {
+        damage = check.x;
+        failed = check.y != 0.0;
+    }
+    // run.erosion.inverted: an element about to invert erodes instead of stopping the run
+    // (counted apart: the fourth word of its erosion state).
+    let inverted = !failed && fp.inverted != 0u && !(min_corner > 0.0);
+    {
+        if (failed || inverted) {
             // Eroded at once (CPU: step::cpu's element stage): no force and no stable step from
             // now on, no inversion check. Its strain and stored hourglass energy leave with it,
             // less the half-step work of its unapplied forces (dot(f_n, v^{n-1/2}) dt / 2); its
             // viscous and plastic work of the step are done, its dissipative state cleared.
             let half_work = 0.5 * ctrl.dt_prev * (dot(fx, vx) + dot(fy, vy));
             let energy = w * a0t + hg_stored + half_work;
-            erosion[e] = vec4<f32>(energy, 1.0, check.x, 0.0);
+            erosion[e] = vec4<f32>(energy, 1.0, damage, select(0.0, 1.0, inverted));
             elem_force[4u * e] = vec2<f32>(0.0);
             elem_force[4u * e + 1u] = vec2<f32>(0.0);
             elem_force[4u * e + 2u] = vec2<f32>(0.0);
@@ -722,7 +733,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 //#endif
             return;
         }
-        erosion[e] = vec4<f32>(0.0, 0.0, check.x, 0.0);
+        if (fp.flags != 0u) {
+            erosion[e] = vec4<f32>(0.0, 0.0, damage, 0.0);
+        }
     }
 //#endif
     if (!(min_corner > 0.0)) {

@@ -425,4 +425,9 @@ fn print_outputs(scene: &Scene, plan: &Plan) {
     }
     println!("outputs    {outputs}");
     println!("plan       {plan}");
+    if scene.run.erode_inverted {
+        println!(
+            "erosion    an element about to invert erodes (run.erosion.inverted) instead of stopping the run"
+        );
+    }
 }

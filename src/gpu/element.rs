@@ -79,7 +79,8 @@ pub struct GpuFailure {
     pub d4: f32,
     pub d5: f32,
     pub rate0: f32,
-    pub _pad: [u32; 2],
+    pub inverted: u32,
+    pub _pad: u32,
 }
 
 /// `GpuFailure::flags`: an equivalent plastic strain limit.
@@ -147,16 +148,24 @@ pub fn bodies(model: &Model) -> Vec<GpuBody> {
         .collect()
 }
 
-/// The failure criteria of `model`'s bodies as the kernel reads them (for scenes with failure).
+/// The failure criteria of `model`'s bodies as the kernel reads them (for scenes with failure or
+/// `run.erosion.inverted`, which every body's `inverted` carries).
 pub fn failures(model: &Model) -> Vec<GpuFailure> {
+    let inverted = u32::from(model.erode_inverted);
     model
         .bodies
         .iter()
         .map(|b| {
             let Some(c) = b.params.failure else {
-                return GpuFailure::default();
+                return GpuFailure {
+                    inverted,
+                    ..Default::default()
+                };
             };
-            let mut g = GpuFailure::default();
+            let mut g = GpuFailure {
+                inverted,
+                ..Default::default()
+            };
             if let Some(x) = c.plastic_strain {
                 g.flags |= FAIL_PLASTIC;
                 g.plastic_strain = x as f32;

@@ -81,6 +81,10 @@ pub struct Summary {
     /// `run.erosion.inverted`); no key without failure.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub eroded_elements: Option<u64>,
+    /// Of `eroded_elements`, those eroded because they were about to invert (with
+    /// `run.erosion.inverted`; no key without).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eroded_inverted: Option<u64>,
     /// Seconds per stage where the backend measures them.
     pub stage_seconds: Vec<(String, f64)>,
     /// History rows written.

@@ -104,7 +104,7 @@ pub fn run_with(
                 &contacts,
                 model.has_plasticity(),
                 model.has_friction(),
-                model.has_failure(),
+                model.has_erosion(),
                 !model.radius.is_empty(),
             )?,
             match scene.run.field_interval {
@@ -154,7 +154,7 @@ pub fn run_with(
                     c.history_digest,
                     model.has_plasticity(),
                     model.has_friction(),
-                    model.has_failure(),
+                    model.has_erosion(),
                 )?,
                 match scene.run.field_interval {
                     Some(_) => Some(FieldWriter::resume(
@@ -180,7 +180,7 @@ pub fn run_with(
             scene,
             plan,
             solver,
-            None,
+            (None, None),
             "running",
             String::new(),
             0.0,
@@ -331,11 +331,16 @@ pub fn run_with(
     };
     // (A device lost by now already failed the run: the summary says so without it.)
     let max_temperature = max_temperature(model, solver).unwrap_or_default();
+    let eroded_inverted = if model.erode_inverted {
+        solver.eroded_inverted_now().ok()
+    } else {
+        None
+    };
     let summary = summary_now(
         scene,
         plan,
         solver,
-        max_temperature,
+        (max_temperature, eroded_inverted),
         status,
         failure.or(interrupted).unwrap_or_default(),
         loop_seconds,
@@ -375,13 +380,14 @@ fn max_temperature(model: &Model, solver: &mut dyn Solver) -> Result<Option<f64>
 }
 
 /// The summary of `solver`'s run so far (`max_temperature`: the highest element temperature,
-/// for a scene with thermal softening).
+/// for a scene with thermal softening; `eroded_inverted`: the elements eroded about to invert,
+/// with `run.erosion.inverted`).
 #[allow(clippy::too_many_arguments)]
 fn summary_now(
     scene: &Scene,
     plan: &Plan,
     solver: &dyn Solver,
-    max_temperature: Option<f64>,
+    (max_temperature, eroded_inverted): (Option<f64>, Option<u64>),
     status: &str,
     message: String,
     loop_seconds: f64,
@@ -441,6 +447,7 @@ fn summary_now(
         eroded_elements: plan
             .has(crate::plan::Stage::Failure)
             .then_some(counters.eroded_elements),
+        eroded_inverted,
         stage_seconds: solver.stage_seconds(),
         history_rows,
         snapshots,

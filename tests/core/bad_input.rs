@@ -1823,6 +1823,46 @@ fn bad_thermal_keys() {
     );
 }
 
+#[test]
+fn bad_erosion_options_name_the_key_and_value() {
+    let with = |erosion: &str| {
+        variant(
+            "end_time = 1.0e-5",
+            &format!("end_time = 1.0e-5\n{erosion}"),
+        )
+    };
+    expect_accepted(
+        "erosion_inverted_ok",
+        &with("erosion = { inverted = true }"),
+        true,
+    );
+    expect_accepted(
+        "erosion_inverted_off_ok",
+        &with("erosion = { inverted = false }"),
+        false,
+    );
+    expect_rejected(
+        "erosion_not_a_table",
+        &with("erosion = true"),
+        &["run.erosion", "true"],
+    );
+    expect_rejected(
+        "erosion_empty",
+        &with("erosion = {}"),
+        &["run.erosion", "{}"],
+    );
+    expect_rejected(
+        "erosion_inverted_not_a_boolean",
+        &with("erosion = { inverted = 1 }"),
+        &["run.erosion.inverted", "1", "true or false"],
+    );
+    expect_rejected(
+        "erosion_unknown_key",
+        &with("erosion = { inverted = true, min_time_step = 1.0e-9 }"),
+        &["run.erosion.min_time_step", "unknown key"],
+    );
+}
+
 fn bad_failure_keys() {
     let yielding = |failure: &str| plastic(&format!("yield_stress = 2.5e8\nfailure = {failure}"));
     let jc = "johnson_cook = { d1 = 0.54, d2 = 4.89, d3 = -3.03, d4 = 0.014, d5 = 1.12 }";
