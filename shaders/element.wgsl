@@ -10,7 +10,14 @@
 // Material failure (`//#if failure`, scenes with a material's `failure` only): the criteria of
 // ricochet::element::failure checked after the stress update, in the CPU's order and with its
 // floors; an element that fails erodes at once (ricochet::step::cpu's element stage): no force,
-// no stable step and no inversion check from that step on, its mass left on its nodes.
+// no stable step and no inversion check from that step on, its mass left on its nodes; with
+// run.erosion.inverted (which compiles the failure part too) an element about to invert erodes
+// the same way instead of stopping the run.
+// Johnson-Cook thermal softening with adiabatic heating (`//#if thermal`, scenes with a material's
+// `m` only): the temperature rise in the plastic state's third word of its second vec4, the flow
+// stress times 1 - T*^m at the start of the step's temperature (held through the return), the
+// rise raised by heating x the step's plastic work per unit reference volume (CPU:
+// ricochet::element::evaluate_state), and T* at the end of the step in the damage's d5 term.
 
 struct Body {
     model: u32,           // 0 linear elastic, 1 neo-Hookean, 2 J2 plastic
@@ -33,6 +40,10 @@ struct Body {
     jc_n: f32,
     jc_c: f32,
     jc_rate0: f32,
+    jc_m: f32,            // Johnson-Cook thermal softening m (0: none), T_m - T_r (1 without),
+    melt_rise: f32,
+    heating: f32,         // taylor_quinney / (density specific_heat) (0 without)
+    _pad1: u32,
 }
 
 //#if failure
@@ -48,7 +59,7 @@ struct Failure {
     d4: f32,
     d5: f32,
     rate0: f32,
-    _p0: u32,
+    inverted: u32,        // 1: an element about to invert erodes (run.erosion.inverted; every body)
     _p1: u32,
 }
 
@@ -93,12 +104,13 @@ override WG: u32 = 64u;
 @group(0) @binding(8) var<storage, read_write> elem_state: array<vec4<f32>>;
 //#endif
 //#if plastic
-// J2: (C_p^-1 - I: xx, yy, xy, zz), (alpha, plastic work so far, 0, 0) per element
+// J2: (C_p^-1 - I: xx, yy, xy, zz), (alpha, plastic work so far, temperature rise (thermal
+// softening; 0 otherwise), 0) per element
 @group(0) @binding(9) var<storage, read_write> plastic_state: array<vec4<f32>>;
 //#endif
 //#if failure
 @group(0) @binding(11) var<storage, read> failures: array<Failure>;   // per body
-// Per element: (eroded energy, 1 once eroded, Johnson-Cook damage, 0).
+// Per element: (eroded energy, 1 once eroded, Johnson-Cook damage, 1 if eroded about to invert).
 @group(0) @binding(12) var<storage, read_write> erosion: array<vec4<f32>>;
 //#endif
 
@@ -198,8 +210,9 @@ fn return_increment(bd: Body, q: f32, j: f32, alpha: f32, dt: f32) -> f32 {
 }
 
 // h = F - I (xx xy yx yy), jm1 = det F - 1 (in plane), zm1 = F_33 - 1, d = C_p^-1 - I; dt the
-// step that led here (the Johnson-Cook rate; 0: none).
-fn j2_update(bd: Body, h: vec4<f32>, jm1: f32, zm1: f32, d: vec4<f32>, alpha: f32, allow: bool, dt: f32) -> J2 {
+// step that led here (the Johnson-Cook rate; 0: none); soft the thermal softening factor
+// 1 - T*^m of the start of the step (1 without).
+fn j2_update(bd: Body, h: vec4<f32>, jm1: f32, zm1: f32, d: vec4<f32>, alpha: f32, allow: bool, dt: f32, soft: f32) -> J2 {
     let f = h + vec4<f32>(1.0, 0.0, 0.0, 1.0);
     // b - I = (F F^T - I) + F D F^T.
     let fd00 = f.x * d.x + f.y * d.z;
@@ -222,13 +235,21 @@ fn j2_update(bd: Body, h: vec4<f32>, jm1: f32, zm1: f32, d: vec4<f32>, alpha: f3
     let mu = bd.mu;
     let q = 2.0 * mu * sqrt(1.5 * e2_trial);
     let j = (1.0 + jm1) * (1.0 + zm1);
+//#if thermal
+    let flow = flow_stress(bd, alpha, 0.0) * soft;
+//#else
     let flow = flow_stress(bd, alpha, 0.0);
+//#endif
     var out: J2;
     out.dev = d;
     out.alpha = alpha;
     out.yielded = false;
     if (allow && q > j * flow) {
+//#if thermal
+        let d_alpha = return_increment(bd, q, j * soft, alpha, dt);
+//#else
         let d_alpha = return_increment(bd, q, j, alpha, dt);
+//#endif
         e *= 1.0 - 3.0 * mu * d_alpha / q;
         out.alpha = alpha + d_alpha;
         out.yielded = true;
@@ -280,8 +301,9 @@ fn j2_update(bd: Body, h: vec4<f32>, jm1: f32, zm1: f32, d: vec4<f32>, alpha: f3
 // The failure check of an element after its stress update (CPU: element::failure::check): its
 // Cauchy stress `s` (xx yy xy zz), deformation gradient `f` (xx xy yx yy) and hoop stretch
 // `f33`, equivalent plastic strain before and after the step, the step `dt` that led here (0 on
-// the first) and its damage before the step. Returns (damage after the step, 1 if it failed).
-fn failure_check(fp: Failure, s: vec4<f32>, f: vec4<f32>, f33: f32, alpha_old: f32, alpha: f32, dt: f32, damage_old: f32) -> vec2<f32> {
+// the first), its damage before the step and its homologous temperature T* after the step (0
+// without thermal softening). Returns (damage after the step, 1 if it failed).
+fn failure_check(fp: Failure, s: vec4<f32>, f: vec4<f32>, f33: f32, alpha_old: f32, alpha: f32, dt: f32, damage_old: f32, t_star: f32) -> vec2<f32> {
     var failed = false;
     var damage = damage_old;
     if ((fp.flags & FAIL_PLASTIC) != 0u) {
@@ -303,8 +325,12 @@ fn failure_check(fp: Failure, s: vec4<f32>, f: vec4<f32>, f33: f32, alpha_old: f
             // No damage below sigma* = -1/3, nor where eps_f is not finite (an overflow).
             if (tri >= -1.0 / 3.0) {
                 let rate_term = 1.0 + fp.d4 * log(max(rate / fp.rate0, 1.0));
-                // The homologous temperature T* is 0 (no heating): the d5 term is 1.
+//#if thermal
+                let eps = (fp.d1 + fp.d2 * exp(fp.d3 * tri)) * rate_term * (1.0 + fp.d5 * t_star);
+//#else
+                // Without thermal softening T* is 0: the d5 term is 1.
                 let eps = (fp.d1 + fp.d2 * exp(fp.d3 * tri)) * rate_term;
+//#endif
                 // NaN or +inf (by bit pattern): no damage; -inf takes the floor, as on the CPU.
                 let bits = bitcast<u32>(eps);
                 if (!((bits & 0x7fffffffu) > 0x7f800000u || bits == 0x7f800000u)) {
@@ -433,6 +459,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var cauchy = vec4<f32>(0.0);
     var alpha_old = 0.0;
     var alpha_new = 0.0;
+    // The homologous temperature after the step (thermal softening; 0 otherwise).
+    var t_star = 0.0;
     if (b.model == 0u) {
 //#if linear_elastic
         let exy = 0.5 * (h.y + h.z);
@@ -452,7 +480,19 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 //#if plastic
         let ps0 = plastic_state[2u * e];
         let ps1 = plastic_state[2u * e + 1u];
-        let s = j2_update(b, h, jm1, zm1, ps0, ps1.x, true, ctrl.dt_prev);
+        // Thermal softening at the temperature of the start of the step.
+        var soft = 1.0;
+        var heat = 0.0;
+//#if thermal
+        heat = ps1.z;
+        if (b.jc_m > 0.0) {
+            let ts = clamp(heat / b.melt_rise, 0.0, 1.0);
+            if (ts > 0.0) {
+                soft = 1.0 - pow(ts, b.jc_m);
+            }
+        }
+//#endif
+        let s = j2_update(b, h, jm1, zm1, ps0, ps1.x, true, ctrl.dt_prev, soft);
         pk = s.pk;
         p33 = s.p33;
         w = s.stored;
@@ -466,13 +506,22 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                 // The start of the step that yielded, from the old state, no return.
                 let ho = h - dtp * fd;
                 let jo = ho.x + ho.w + ho.x * ho.w - ho.y * ho.z;
-                let so = j2_update(b, ho, jo, zm1 - dtp * f33d, ps0, ps1.x, false, 0.0);
+                let so = j2_update(b, ho, jo, zm1 - dtp * f33d, ps0, ps1.x, false, 0.0, soft);
                 plastic_work = 0.5 * dtp * (dot(so.pk + s.pk, fd) + (so.p33 + s.p33) * f33d) - (s.stored - so.stored);
             }
             acc += plastic_work * a0t;
+//#if thermal
+            // Adiabatic heating of the step's plastic work (never negative).
+            heat += b.heating * max(plastic_work, 0.0);
+//#endif
             plastic_state[2u * e] = s.dev;
-            plastic_state[2u * e + 1u] = vec4<f32>(s.alpha, acc, 0.0, 0.0);
+            plastic_state[2u * e + 1u] = vec4<f32>(s.alpha, acc, heat, 0.0);
         }
+//#if thermal
+        if (b.jc_m > 0.0) {
+            t_star = clamp(heat / b.melt_rise, 0.0, 1.0);
+        }
+//#endif
         if ((ctrl.flags & FLAG_SAMPLE) != 0u) {
             var off = params.n_nodes + params.n_elems + params.n_cons;
             if (params.loads != 0u) {
@@ -639,16 +688,25 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 //#if failure
     let fp = failures[el.body];
+    var damage = eroding.z;
+    var failed = false;
     if (fp.flags != 0u) {
-        let check = failure_check(fp, cauchy, f, hoop_stretch, alpha_old, alpha_new, ctrl.dt_prev, eroding.z);
-        if (check.y != 0.0) {
+        let check = failure_check(fp, cauchy, f, hoop_stretch, alpha_old, alpha_new, ctrl.dt_prev, eroding.z, t_star);
+        damage = check.x;
+        failed = check.y != 0.0;
+    }
+    // run.erosion.inverted: an element about to invert erodes instead of stopping the run
+    // (counted apart: the fourth word of its erosion state).
+    let inverted = !failed && fp.inverted != 0u && !(min_corner > 0.0);
+    {
+        if (failed || inverted) {
             // Eroded at once (CPU: step::cpu's element stage): no force and no stable step from
             // now on, no inversion check. Its strain and stored hourglass energy leave with it,
             // less the half-step work of its unapplied forces (dot(f_n, v^{n-1/2}) dt / 2); its
             // viscous and plastic work of the step are done, its dissipative state cleared.
             let half_work = 0.5 * ctrl.dt_prev * (dot(fx, vx) + dot(fy, vy));
             let energy = w * a0t + hg_stored + half_work;
-            erosion[e] = vec4<f32>(energy, 1.0, check.x, 0.0);
+            erosion[e] = vec4<f32>(energy, 1.0, damage, select(0.0, 1.0, inverted));
             elem_force[4u * e] = vec2<f32>(0.0);
             elem_force[4u * e + 1u] = vec2<f32>(0.0);
             elem_force[4u * e + 2u] = vec2<f32>(0.0);
@@ -675,7 +733,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
 //#endif
             return;
         }
-        erosion[e] = vec4<f32>(0.0, 0.0, check.x, 0.0);
+        if (fp.flags != 0u) {
+            erosion[e] = vec4<f32>(0.0, 0.0, damage, 0.0);
+        }
     }
 //#endif
     if (!(min_corner > 0.0)) {

@@ -14,8 +14,8 @@ pub enum Stage {
     /// state kept between steps).
     Plasticity,
     /// Failure criteria after the element evaluation, and erosion of the elements that fail
-    /// (bodies whose material has `failure`; per-element eroded flag and damage kept between
-    /// steps).
+    /// (bodies whose material has `failure`) or, with `run.erosion.inverted`, are about to
+    /// invert; per-element eroded flag and damage kept between steps.
     Failure,
     /// Viscous hourglass forces (bodies with the viscous form).
     HourglassViscous,
@@ -107,7 +107,7 @@ impl Plan {
         if model.has_plasticity() {
             stages.push(Stage::Plasticity);
         }
-        if model.has_failure() {
+        if model.has_erosion() {
             stages.push(Stage::Failure);
         }
         if viscous > 0 {

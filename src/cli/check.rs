@@ -144,6 +144,18 @@ fn print_bodies(scene: &Scene, model: &Model) {
                 );
             }
         }
+        if let Some(t) = scene
+            .bodies
+            .iter()
+            .find(|sb| sb.name == b.name)
+            .and_then(|sb| scene.materials.get(sb.material))
+            .and_then(|m| m.plasticity?.johnson_cook?.thermal)
+        {
+            println!(
+                "           {}; the temperature T per element from room temperature, T* = (T - T_r) / (T_m - T_r) in [0, 1]",
+                t.describe()
+            );
+        }
         if let Some(f) = &b.params.failure {
             println!(
                 "           failure: {}; a failed element erodes at once (its mass stays on its nodes)",
@@ -413,4 +425,9 @@ fn print_outputs(scene: &Scene, plan: &Plan) {
     }
     println!("outputs    {outputs}");
     println!("plan       {plan}");
+    if scene.run.erode_inverted {
+        println!(
+            "erosion    an element about to invert erodes (run.erosion.inverted) instead of stopping the run"
+        );
+    }
 }

@@ -80,6 +80,15 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
         s.max_energy_error,
         out.display()
     );
+    if let Some(n) = s.eroded_inverted {
+        println!(
+            "erosion: {} elements eroded, {n} of them about to invert (run.erosion.inverted)",
+            s.eroded_elements.unwrap_or(0)
+        );
+    }
+    if let Some(t) = s.max_temperature {
+        println!("thermal softening: highest element temperature {t:.1} K at the end");
+    }
     if s.contact_searches > 0 {
         println!(
             "contact: {} broad-phase searches in {} steps",

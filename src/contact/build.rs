@@ -444,7 +444,7 @@ impl ContactSet {
             interfaces.push(Interface::new(&w.name));
             walls.push(bld.wall(w, iface));
         }
-        if model.has_failure() {
+        if model.has_erosion() {
             bld.erodible_nodes();
         }
         let Builder {

@@ -11,7 +11,8 @@
 //! - the rate term is 1 + d4 ln(max(rate / rate0, 1)), as the flow stress's, with the same
 //!   reference rate rate0 (`johnson_cook.reference_strain_rate` of the flow stress, 1/s without
 //!   one), rate = d(eps_p) / dt of the step;
-//! - the temperature term is 1 + d5 T*, T* the homologous temperature (0 without heating);
+//! - the temperature term is 1 + d5 T*, T* the homologous temperature at the end of the step
+//!   (the flow stress's, [`crate::element::ElementParams::t_star`]; 0 without thermal softening);
 //! - eps_f is bounded below by [`MIN_FAILURE_STRAIN`] (d1 < 0, d4 < 0 at high rates or d5 < 0
 //!   would make it negative) and a non-finite eps_f (an exponential overflow) means no damage;
 //! - D += d(eps_p) / eps_f with eps_f at the end of the step; the element fails at D >= 1.

@@ -41,7 +41,8 @@ pub struct ElementOut {
     pub def_grad: [f64; 4],
     /// Out-of-plane stretch F_33 (axisymmetric: r / R; 1 otherwise).
     pub hoop_stretch: f64,
-    /// Plastic state after the step (J2 plastic materials; the input state otherwise).
+    /// Plastic state after the step (J2 plastic materials; the input state otherwise), with the
+    /// temperature rise of the step's adiabatic heating (Johnson-Cook thermal softening).
     pub plastic: PlasticState,
     /// Energy the plastic return dissipated in this evaluation (J2 plastic materials).
     pub plastic_work: f64,
@@ -165,7 +166,13 @@ pub fn evaluate_state(
             let old = j2_elastic(p, &f_old, det(&f_old), f33_old, plastic);
             d = step_plastic_work(&old, &s, &fd, f33d, dt_prev);
         }
-        (s.pk, s.p33, s.stored, s.cauchy, s.state, d)
+        let mut state = s.state;
+        if p.has_thermal() && state.alpha > plastic.alpha {
+            // Adiabatic heating: beta dW_p / (rho_0 c_p) of the step's plastic work per unit
+            // reference volume (never negative: round-off cannot cool).
+            state.heat = plastic.heat + p.heating * d.max(0.0);
+        }
+        (s.pk, s.p33, s.stored, s.cauchy, state, d)
     } else {
         let (pk, w, cauchy, p33) = stress(p, &f, j, f33);
         (pk, p33, w, cauchy, *plastic, 0.0)

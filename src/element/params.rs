@@ -54,6 +54,17 @@ pub struct ElementParams {
     pub jc_c: f64,
     /// Johnson-Cook reference strain rate.
     pub jc_rate0: f64,
+    /// Johnson-Cook thermal softening exponent m (0: no thermal softening nor heating; the
+    /// flow stress then has no temperature term and the temperature stays at room temperature).
+    pub jc_m: f64,
+    /// T_m - T_r: the temperature rise at which T* reaches 1 (1 without thermal softening).
+    pub melt_rise: f64,
+    /// The temperature rise per unit plastic work per unit reference volume,
+    /// taylor_quinney / (density specific_heat) (K m^3 / J; 0 without heating).
+    pub heating: f64,
+    /// Room (initial) temperature T_r (K; 0 without thermal softening): an element's
+    /// temperature is T_r plus its rise ([`super::plastic::PlasticState::heat`]).
+    pub room_temperature: f64,
     /// The material's failure criteria (`None`: its elements never fail; see
     /// [`crate::element::failure`]).
     pub failure: Option<FailureCriteria>,
@@ -74,6 +85,7 @@ impl ElementParams {
         let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
         let mu = e / (2.0 * (1.0 + nu));
         let jc = material.plasticity.and_then(|p| p.johnson_cook);
+        let thermal = jc.and_then(|j| j.thermal);
         let lambda_plane = match formulation {
             Formulation::PlaneStrain | Formulation::Axisymmetric => lambda,
             Formulation::PlaneStress => 2.0 * lambda * mu / (lambda + 2.0 * mu),
@@ -103,6 +115,12 @@ impl ElementParams {
             jc_n: jc.map_or(1.0, |j| j.n),
             jc_c: jc.map_or(0.0, |j| j.c),
             jc_rate0: jc.map_or(1.0, |j| j.reference_strain_rate),
+            jc_m: thermal.map_or(0.0, |t| t.m),
+            melt_rise: thermal.map_or(1.0, |t| t.melt_temperature - t.room_temperature),
+            heating: thermal.map_or(0.0, |t| {
+                t.taylor_quinney / (material.density * t.specific_heat)
+            }),
+            room_temperature: thermal.map_or(0.0, |t| t.room_temperature),
             failure: material.failure,
         }
     }
@@ -110,6 +128,31 @@ impl ElementParams {
     /// Dilatational wave speed of the formulation, sqrt((lambda_plane + 2 mu) / rho).
     pub fn dilatational_speed(&self) -> f64 {
         ((self.lambda_plane + 2.0 * self.mu) / self.density).sqrt()
+    }
+
+    /// Whether the material softens with temperature and heats adiabatically (Johnson-Cook
+    /// `m`, `melt_temperature`, `room_temperature`).
+    #[inline(always)]
+    pub fn has_thermal(&self) -> bool {
+        self.jc_m > 0.0
+    }
+
+    /// The homologous temperature T* of the temperature rise `heat`: heat / (T_m - T_r), clamped
+    /// to [0, 1] (0 without thermal softening).
+    #[inline(always)]
+    pub fn t_star(&self, heat: f64) -> f64 {
+        (heat / self.melt_rise).clamp(0.0, 1.0)
+    }
+
+    /// The thermal softening factor 1 - T*^m of the temperature rise `heat` (1 without thermal
+    /// softening).
+    #[inline(always)]
+    pub fn softening(&self, heat: f64) -> f64 {
+        if self.has_thermal() {
+            1.0 - self.t_star(heat).powf(self.jc_m)
+        } else {
+            1.0
+        }
     }
 
     /// Whether the bulk viscosity is on.

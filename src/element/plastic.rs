@@ -27,20 +27,26 @@
 
 use super::params::ElementParams;
 
-/// Plastic state of one element: C_p^-1 (xx, yy, xy, zz) and the equivalent plastic strain.
+/// Plastic state of one element: C_p^-1 (xx, yy, xy, zz), the equivalent plastic strain and
+/// the temperature rise of adiabatic heating.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PlasticState {
     /// Inverse plastic right Cauchy-Green tensor C_p^-1 (xx, yy, xy, zz); I when virgin.
     pub cp_inv: [f64; 4],
     /// Equivalent plastic strain alpha (the integral of sqrt(2/3) |d_p| dt).
     pub alpha: f64,
+    /// Temperature rise above room temperature T - T_r (K) of a material with Johnson-Cook
+    /// thermal softening: the sum over the steps of beta dW_p / (rho_0 c_p), dW_p the step's
+    /// plastic work per unit reference volume ([`step_plastic_work`]); 0 without heating.
+    pub heat: f64,
 }
 
 impl PlasticState {
-    /// A virgin element: C_p^-1 = I, alpha = 0.
+    /// A virgin element: C_p^-1 = I, alpha = 0, at room temperature.
     pub const VIRGIN: Self = Self {
         cp_inv: [1.0, 1.0, 0.0, 1.0],
         alpha: 0.0,
+        heat: 0.0,
     };
 }
 
@@ -63,7 +69,8 @@ pub struct J2Stress {
     pub stored: f64,
     /// Energy the return dissipated, per reference volume: W(trial) - W(returned) >= 0.
     pub dissipated: f64,
-    /// The state after the step (bit for bit the old one on an elastic step).
+    /// The state after the step (bit for bit the old one on an elastic step; its `heat` the
+    /// old one: [`crate::element::evaluate_state`] adds the step's heating).
     pub state: PlasticState,
 }
 
@@ -107,8 +114,10 @@ pub fn j2_stress(
     j2_update(p, f, j, f33, old, true, dt)
 }
 
-/// The flow stress at equivalent plastic strain `alpha` and plastic strain rate `rate`:
-/// (sigma_y + H alpha + B alpha^n)(1 + C ln(max(rate / rate0, 1))) (linear hardening: B = C = 0).
+/// The flow stress at equivalent plastic strain `alpha` and plastic strain rate `rate`, at room
+/// temperature: (sigma_y + H alpha + B alpha^n)(1 + C ln(max(rate / rate0, 1))) (linear
+/// hardening: B = C = 0). Thermal softening multiplies it by
+/// [`ElementParams::softening`] of the temperature at the start of the step.
 #[inline(always)]
 pub fn flow_stress(p: &ElementParams, alpha: f64, rate: f64) -> f64 {
     let hard = p.yield_stress + p.hardening * alpha + p.jc_b * alpha.max(0.0).powf(p.jc_n);
@@ -116,7 +125,9 @@ pub fn flow_stress(p: &ElementParams, alpha: f64, rate: f64) -> f64 {
 }
 
 /// The increment of alpha of a return from the von Mises stress `q` of the trial (Kirchhoff),
-/// volume ratio `j`, plastic strain `alpha` and step `dt`: the root of
+/// volume ratio `j` (times the thermal softening factor 1 - T*^m, held at its start-of-step
+/// value through the return, so that Newton's derivative below is exact for the function it
+/// solves), plastic strain `alpha` and step `dt`: the root of
 /// q - 3 mu d = j flow(alpha + d, d / dt) in (0, q / 3 mu), by Newton's method kept inside a
 /// bracket (bisection where a Newton step leaves it). Closed form for linear hardening.
 #[inline(always)]
@@ -216,12 +227,14 @@ fn j2_update(
     // von Mises stress of the trial: sqrt(3/2) |2 mu e|.
     let q = 2.0 * mu * (1.5 * e2_trial).sqrt();
     // The yield condition is on the Cauchy stress, tau_vm / J <= flow stress (its rate term is 0
-    // at the elastic trial).
-    let flow = flow_stress(p, old.alpha, 0.0);
+    // at the elastic trial), softened at the temperature of the start of the step (a factor of
+    // exactly 1 without thermal softening).
+    let soft = p.softening(old.heat);
+    let flow = flow_stress(p, old.alpha, 0.0) * soft;
     let mut state = *old;
     let mut dissipated = 0.0;
     if allow_return && q > j * flow {
-        let d_alpha = return_increment(p, q, j, old.alpha, dt);
+        let d_alpha = return_increment(p, q, j * soft, old.alpha, dt);
         let scale = 1.0 - 3.0 * mu * d_alpha / q;
         e = e.map(|x| x * scale);
         let e2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
@@ -372,8 +385,98 @@ mod tests {
                 n: 0.31,
                 c,
                 reference_strain_rate: 1.0,
+                thermal: None,
             }),
         })
+    }
+
+    /// Johnson-Cook copper without rate term, with thermal softening m = 1 (T_r 300 K, T_m
+    /// 1356 K) and adiabatic heating.
+    fn johnson_cook_thermal() -> ElementParams {
+        copper_with(Plasticity {
+            yield_stress: 9.0e7,
+            hardening_modulus: 0.0,
+            johnson_cook: Some(crate::scene::JohnsonCook {
+                a: 9.0e7,
+                b: 2.92e8,
+                n: 0.31,
+                c: 0.0,
+                reference_strain_rate: 1.0,
+                thermal: Some(crate::scene::ThermalSoftening {
+                    m: 1.0,
+                    melt_temperature: 1356.0,
+                    room_temperature: 300.0,
+                    specific_heat: 383.0,
+                    taylor_quinney: 0.9,
+                }),
+            }),
+        })
+    }
+
+    #[test]
+    fn thermal_softening_scales_the_flow_stress_by_one_minus_t_star_to_the_m() {
+        let p = johnson_cook_thermal();
+        assert!(p.has_thermal());
+        assert_eq!(p.melt_rise, 1056.0);
+        assert!((p.heating - 0.9 / (8930.0 * 383.0)).abs() < 1e-20);
+        assert_eq!(p.softening(0.0), 1.0);
+        assert_eq!(p.t_star(-5.0), 0.0);
+        assert_eq!(p.t_star(2000.0), 1.0);
+        assert!((p.softening(264.0) - 0.75).abs() < 1e-15);
+        // The return lands on the softened flow stress of the start-of-step temperature, and
+        // carries the temperature rise unchanged (the element function adds the heating).
+        let f = [1.0, 0.01, 0.0, 0.985];
+        let cold = j2_stress(&p, &f, det(&f), 1.0, &PlasticState::VIRGIN, 1e-6);
+        let hot_state = PlasticState {
+            heat: 264.0,
+            ..PlasticState::VIRGIN
+        };
+        let hot = j2_stress(&p, &f, det(&f), 1.0, &hot_state, 1e-6);
+        assert_eq!(hot.state.heat, 264.0);
+        let a = hot.state.alpha;
+        assert!(a > cold.state.alpha);
+        let flow = 0.75 * flow_stress(&p, a, 0.0);
+        let vm = von_mises(&hot.cauchy);
+        assert!((vm - flow).abs() < 1e-9 * flow, "{vm} against {flow}");
+        // Without thermal softening nothing changes: the same bits as before the heat existed.
+        let plain = johnson_cook(0.0);
+        assert!(!plain.has_thermal());
+        assert_eq!(plain.softening(264.0), 1.0);
+        let s = j2_stress(&plain, &f, det(&f), 1.0, &hot_state, 1e-6);
+        let r = j2_stress(&plain, &f, det(&f), 1.0, &PlasticState::VIRGIN, 1e-6);
+        assert_eq!(s.cauchy, r.cauchy);
+        assert_eq!(s.state.alpha, r.state.alpha);
+    }
+
+    #[test]
+    fn a_yielding_step_heats_by_beta_times_its_plastic_work_over_rho_c() {
+        use crate::element::{evaluate_state, Dissipation};
+        use crate::geometry::quad_geometry;
+        let p = johnson_cook_thermal();
+        let dx = [[0.0, 0.0], [1e-3, 0.0], [1e-3, 1e-3], [0.0, 1e-3]];
+        let g = quad_geometry(&dx);
+        // Simple shear, u_x = gamma y, at the rate v_x = gamma y / dt.
+        let (gamma, dt) = (0.01, 1e-6);
+        let u: [[f64; 2]; 4] = std::array::from_fn(|a| [gamma * dx[a][1], 0.0]);
+        let v: [[f64; 2]; 4] = std::array::from_fn(|a| [gamma * dx[a][1] / dt, 0.0]);
+        let out = evaluate_state(
+            &p,
+            &g,
+            &dx,
+            &u,
+            &v,
+            &Dissipation::default(),
+            dt,
+            &PlasticState::VIRGIN,
+        );
+        assert!(out.plastic.alpha > 0.0 && out.plastic_work > 0.0);
+        // plastic_work is the element's (per reference volume times A0 t, t = 1).
+        let expect = p.heating * out.plastic_work / 1e-6;
+        assert!(
+            (out.plastic.heat - expect).abs() < 1e-12 * expect,
+            "{} against {expect}",
+            out.plastic.heat
+        );
     }
 
     #[test]

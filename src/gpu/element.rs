@@ -1,6 +1,7 @@
 //! Element stage kernel (`shaders/element.wgsl`): stress, hourglass and bulk-viscosity forces per
 //! element, the element stable step, and on sample steps the element energies; the mirrors of its
-//! `Body`, `Element` and `Failure` and their tables from the model. The CPU reference is
+//! `Body` (with the Johnson-Cook thermal softening and heating), `Element` and `Failure` and their
+//! tables from the model. The CPU reference is
 //! [`crate::element::evaluate`] (and, for failure, [`crate::element::failure`] with the erosion of
 //! [`crate::step::cpu`]); `tests/gpu.rs` compares the two on random inputs.
 
@@ -42,6 +43,10 @@ pub struct GpuBody {
     pub jc_n: f32,
     pub jc_c: f32,
     pub jc_rate0: f32,
+    pub jc_m: f32,
+    pub melt_rise: f32,
+    pub heating: f32,
+    pub _pad1: u32,
 }
 
 /// Mirror of WGSL `Element`: corners relative to the centre, nodes, body (fields documented in
@@ -74,7 +79,8 @@ pub struct GpuFailure {
     pub d4: f32,
     pub d5: f32,
     pub rate0: f32,
-    pub _pad: [u32; 2],
+    pub inverted: u32,
+    pub _pad: u32,
 }
 
 /// `GpuFailure::flags`: an equivalent plastic strain limit.
@@ -86,7 +92,7 @@ pub const FAIL_PRINCIPAL: u32 = 4;
 /// `GpuFailure::flags`: a spall (tensile mean stress) limit.
 pub const FAIL_TENSILE: u32 = 8;
 
-const _: () = assert!(std::mem::size_of::<GpuBody>() == 80);
+const _: () = assert!(std::mem::size_of::<GpuBody>() == 96);
 const _: () = assert!(std::mem::size_of::<GpuFailure>() == 48);
 const _: () = assert!(std::mem::size_of::<GpuElement>() == 64);
 
@@ -133,22 +139,33 @@ pub fn bodies(model: &Model) -> Vec<GpuBody> {
                 jc_n: p.jc_n as f32,
                 jc_c: p.jc_c as f32,
                 jc_rate0: p.jc_rate0 as f32,
+                jc_m: p.jc_m as f32,
+                melt_rise: p.melt_rise as f32,
+                heating: p.heating as f32,
                 ..Default::default()
             }
         })
         .collect()
 }
 
-/// The failure criteria of `model`'s bodies as the kernel reads them (for scenes with failure).
+/// The failure criteria of `model`'s bodies as the kernel reads them (for scenes with failure or
+/// `run.erosion.inverted`, which every body's `inverted` carries).
 pub fn failures(model: &Model) -> Vec<GpuFailure> {
+    let inverted = u32::from(model.erode_inverted);
     model
         .bodies
         .iter()
         .map(|b| {
             let Some(c) = b.params.failure else {
-                return GpuFailure::default();
+                return GpuFailure {
+                    inverted,
+                    ..Default::default()
+                };
             };
-            let mut g = GpuFailure::default();
+            let mut g = GpuFailure {
+                inverted,
+                ..Default::default()
+            };
             if let Some(x) = c.plastic_strain {
                 g.flags |= FAIL_PLASTIC;
                 g.plastic_strain = x as f32;

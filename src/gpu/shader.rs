@@ -36,6 +36,10 @@ pub struct Features {
     /// Materials with `failure`: the element stage's failure check and erosion state (a scene
     /// without failure compiles neither, nor their bindings).
     pub failure: bool,
+    /// Materials with Johnson-Cook thermal softening: the element stage's temperature (in the
+    /// plastic state, no buffer of its own), softening and heating, and the damage's d5 term (a
+    /// scene without compiles none of it).
+    pub thermal: bool,
     /// Contacts or walls by penalty, perturbed or augmented Lagrangian (WGSL `SPRINGS`).
     pub contact_springs: bool,
     /// Contacts or walls with Coulomb friction (WGSL `FRICTION`).
@@ -82,6 +86,7 @@ impl Default for Features {
             plane_stress: true,
             hourglass_stiffness: true,
             failure: false,
+            thermal: false,
             contact_springs: true,
             contact_friction: true,
             reduce_group: 256,
@@ -107,6 +112,7 @@ impl Features {
             "plane_stress" => self.plane_stress,
             "hourglass_stiffness" => self.hourglass_stiffness,
             "failure" => self.failure,
+            "thermal" => self.thermal,
             _ => false,
         }
     }
@@ -117,10 +123,11 @@ impl Features {
         for dissipation in [false, true] {
             for fields in [false, true] {
                 for loads in [false, true] {
-                    for (plastic, axisymmetric, failure) in [
-                        (false, false, false),
-                        (true, true, true),
-                        (true, false, true),
+                    for (plastic, axisymmetric, failure, thermal) in [
+                        (false, false, false, false),
+                        (true, true, true, true),
+                        (true, false, true, false),
+                        (true, false, false, true),
                     ] {
                         for (reduce_group, contact_group) in [(64, 8), (256, 256)] {
                             for elastic in [false, true] {
@@ -135,6 +142,7 @@ impl Features {
                                     plane_stress: elastic,
                                     hourglass_stiffness: elastic,
                                     failure,
+                                    thermal,
                                     contact_springs: elastic,
                                     contact_friction: elastic,
                                     reduce_group,

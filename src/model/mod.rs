@@ -165,6 +165,8 @@ pub struct Model {
     pub time_step: Option<f64>,
     /// The run's safety factor on the stable step (as in the scene).
     pub time_step_scale: f64,
+    /// `run.erosion.inverted`: an element about to invert erodes instead of stopping the run.
+    pub erode_inverted: bool,
 }
 
 impl Model {
@@ -197,6 +199,7 @@ impl Model {
             gravity_ramp: scene.run.gravity_ramp,
             time_step: scene.run.time_step,
             time_step_scale: scene.run.time_step_scale,
+            erode_inverted: scene.run.erode_inverted,
         };
         let any_axi = scene
             .bodies
@@ -649,6 +652,12 @@ impl Model {
     /// Whether a body's material has failure criteria (its elements may erode).
     pub fn has_failure(&self) -> bool {
         self.bodies.iter().any(|b| b.params.failure.is_some())
+    }
+
+    /// Whether elements may erode: a material with failure criteria, or `run.erosion.inverted`
+    /// (the plan's failure stage and the erosion state).
+    pub fn has_erosion(&self) -> bool {
+        self.has_failure() || self.erode_inverted
     }
 
     /// Whether a body's material has Johnson-Cook damage (kept per element between steps).

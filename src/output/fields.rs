@@ -500,6 +500,16 @@ fn arrays(model: &Model, snap: &Snapshot, body: &crate::model::BodyModel) -> [Ve
             values: Values::F64(fields.iter().map(|f| f.pressure).collect()),
         });
     }
+    if body.params.has_thermal() && !snap.plastic.is_empty() {
+        // Johnson-Cook thermal softening: T = T_r + the element's temperature rise (K).
+        let room = body.params.room_temperature;
+        cell_data.push(Array {
+            name: "temperature",
+            components: 1,
+            extra: "",
+            values: Values::F64(elems.clone().map(|e| room + snap.plastic[e].heat).collect()),
+        });
+    }
     if body.params.failure.is_some() && !snap.eroded.is_empty() {
         cell_data.push(Array {
             name: "eroded",

@@ -69,10 +69,22 @@ pub struct Summary {
     /// no key in `summary.json` for a scene without failure.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub failure: Vec<String>,
+    /// Johnson-Cook thermal softening with adiabatic heating: one line per material that has it
+    /// ("steel: thermal softening m 1, ..."); no key in `summary.json` for a scene without.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub thermal: Vec<String>,
+    /// The highest element temperature at the end (K), for a scene with thermal softening; no
+    /// key without.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_temperature: Option<f64>,
     /// Elements eroded by the end of the run (failed, or about to invert with
     /// `run.erosion.inverted`); no key without failure.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub eroded_elements: Option<u64>,
+    /// Of `eroded_elements`, those eroded because they were about to invert (with
+    /// `run.erosion.inverted`; no key without).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eroded_inverted: Option<u64>,
     /// Seconds per stage where the backend measures them.
     pub stage_seconds: Vec<(String, f64)>,
     /// History rows written.

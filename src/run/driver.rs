@@ -104,7 +104,7 @@ pub fn run_with(
                 &contacts,
                 model.has_plasticity(),
                 model.has_friction(),
-                model.has_failure(),
+                model.has_erosion(),
                 !model.radius.is_empty(),
             )?,
             match scene.run.field_interval {
@@ -154,7 +154,7 @@ pub fn run_with(
                     c.history_digest,
                     model.has_plasticity(),
                     model.has_friction(),
-                    model.has_failure(),
+                    model.has_erosion(),
                 )?,
                 match scene.run.field_interval {
                     Some(_) => Some(FieldWriter::resume(
@@ -180,6 +180,7 @@ pub fn run_with(
             scene,
             plan,
             solver,
+            (None, None),
             "running",
             String::new(),
             0.0,
@@ -328,10 +329,18 @@ pub fn run_with(
     } else {
         "completed"
     };
+    // (A device lost by now already failed the run: the summary says so without it.)
+    let max_temperature = max_temperature(model, solver).unwrap_or_default();
+    let eroded_inverted = if model.erode_inverted {
+        solver.eroded_inverted_now().ok()
+    } else {
+        None
+    };
     let summary = summary_now(
         scene,
         plan,
         solver,
+        (max_temperature, eroded_inverted),
         status,
         failure.or(interrupted).unwrap_or_default(),
         loop_seconds,
@@ -353,12 +362,32 @@ fn write_summary(out_dir: &Path, summary: &Summary) -> Result<()> {
     write_file(&out_dir.join("summary.json"), &(json + "\n"))
 }
 
-/// The summary of `solver`'s run so far.
+/// The highest temperature of the elements of `model`'s bodies with Johnson-Cook thermal
+/// softening now (K; `None` without: no readback then).
+fn max_temperature(model: &Model, solver: &mut dyn Solver) -> Result<Option<f64>> {
+    if !model.bodies.iter().any(|b| b.params.has_thermal()) {
+        return Ok(None);
+    }
+    let plastic = solver.plastic_now()?;
+    let mut max = f64::NEG_INFINITY;
+    for b in model.bodies.iter().filter(|b| b.params.has_thermal()) {
+        for e in b.elements.clone() {
+            let heat = plastic.get(e).map_or(0.0, |p| p.heat);
+            max = max.max(b.params.room_temperature + heat);
+        }
+    }
+    Ok(max.is_finite().then_some(max))
+}
+
+/// The summary of `solver`'s run so far (`max_temperature`: the highest element temperature,
+/// for a scene with thermal softening; `eroded_inverted`: the elements eroded about to invert,
+/// with `run.erosion.inverted`).
 #[allow(clippy::too_many_arguments)]
 fn summary_now(
     scene: &Scene,
     plan: &Plan,
     solver: &dyn Solver,
+    (max_temperature, eroded_inverted): (Option<f64>, Option<u64>),
     status: &str,
     message: String,
     loop_seconds: f64,
@@ -406,9 +435,19 @@ fn summary_now(
             .iter()
             .filter_map(|m| Some(format!("{}: {}", m.name, m.failure?.describe())))
             .collect(),
+        thermal: scene
+            .materials
+            .iter()
+            .filter_map(|m| {
+                let t = m.plasticity?.johnson_cook?.thermal?;
+                Some(format!("{}: {}", m.name, t.describe()))
+            })
+            .collect(),
+        max_temperature,
         eroded_elements: plan
             .has(crate::plan::Stage::Failure)
             .then_some(counters.eroded_elements),
+        eroded_inverted,
         stage_seconds: solver.stage_seconds(),
         history_rows,
         snapshots,

@@ -1,6 +1,6 @@
 //! `[[material]]`: materials (README, "Scene format", `[[material]]`): the raw table,
-//! [`Material`], [`MaterialModel`], the yield parameters [`Plasticity`] and [`JohnsonCook`], the
-//! failure criteria [`FailureCriteria`] and [`JohnsonCookDamage`], and their validation. The
+//! [`Material`], [`MaterialModel`], the yield parameters [`Plasticity`] and [`JohnsonCook`] (with
+//! its thermal softening and adiabatic heating, [`ThermalSoftening`]), the failure criteria [`FailureCriteria`] and [`JohnsonCookDamage`], and their validation. The
 //! models themselves are in [`crate::element`] (CPU reference; failure in
 //! [`crate::element::failure`]) and `shaders/element.wgsl` (GPU). Host-side only.
 
@@ -22,6 +22,8 @@ pub(super) struct RawMaterial {
     yield_stress: Option<f64>,
     hardening_modulus: Option<f64>,
     johnson_cook: Option<toml::Value>,
+    specific_heat: Option<f64>,
+    taylor_quinney: Option<f64>,
     failure: Option<toml::Value>,
 }
 
@@ -49,9 +51,10 @@ pub struct Plasticity {
     pub johnson_cook: Option<JohnsonCook>,
 }
 
-/// Johnson-Cook flow stress without thermal softening:
-/// (a + b eps_p^n)(1 + c ln(max(rate / reference_strain_rate, 1))), rate the equivalent plastic
-/// strain rate.
+/// Johnson-Cook flow stress:
+/// (a + b eps_p^n)(1 + c ln(max(rate / reference_strain_rate, 1)))(1 - T*^m), rate the
+/// equivalent plastic strain rate, T* the homologous temperature (0, no softening, without
+/// [`JohnsonCook::thermal`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JohnsonCook {
     /// Initial yield stress A (Pa), > 0.
@@ -64,6 +67,48 @@ pub struct JohnsonCook {
     pub c: f64,
     /// Reference strain rate (1/s), > 0.
     pub reference_strain_rate: f64,
+    /// Thermal softening with adiabatic heating (`m`, `melt_temperature`, `room_temperature` in
+    /// the `johnson_cook` table, `specific_heat` and `taylor_quinney` beside it); `None`: the
+    /// temperature stays at room temperature and T* = 0.
+    pub thermal: Option<ThermalSoftening>,
+}
+
+/// Johnson-Cook thermal softening with adiabatic heating: every element has a temperature T,
+/// raised on each step by `taylor_quinney` times the step's plastic work per unit reference
+/// volume over (density x `specific_heat`) (the reference density: the heat per unit mass);
+/// the flow stress gets the factor 1 - T*^m and the Johnson-Cook damage's d5 term uses the same
+/// T* = (T - room_temperature) / (melt_temperature - room_temperature), clamped to [0, 1].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThermalSoftening {
+    /// Thermal softening exponent m, > 0.
+    pub m: f64,
+    /// Melting temperature T_m (K), > room_temperature.
+    pub melt_temperature: f64,
+    /// Room (reference and initial) temperature T_r (K), >= 0.
+    pub room_temperature: f64,
+    /// Specific heat c_p (J/(kg K)), > 0.
+    pub specific_heat: f64,
+    /// Taylor-Quinney coefficient beta: the fraction of the plastic work that heats, in
+    /// [0, 1] (0.9 by default).
+    pub taylor_quinney: f64,
+}
+
+impl ThermalSoftening {
+    /// The default Taylor-Quinney coefficient.
+    pub const TAYLOR_QUINNEY: f64 = 0.9;
+
+    /// As `check` and `summary.json` state it.
+    pub fn describe(&self) -> String {
+        format!(
+            "thermal softening m {}, melt temperature {} K, room temperature {} K; adiabatic \
+             heating: specific heat {} J/(kg K), taylor_quinney {}",
+            self.m,
+            self.melt_temperature,
+            self.room_temperature,
+            self.specific_heat,
+            self.taylor_quinney
+        )
+    }
 }
 
 /// Johnson-Cook damage (Johnson and Cook 1985): the element fails when
@@ -215,6 +260,8 @@ impl Validator<'_> {
                 ("yield_stress", m.yield_stress.is_some()),
                 ("hardening_modulus", m.hardening_modulus.is_some()),
                 ("johnson_cook", m.johnson_cook.is_some()),
+                ("specific_heat", m.specific_heat.is_some()),
+                ("taylor_quinney", m.taylor_quinney.is_some()),
             ];
             if let Some((k, _)) = given.iter().find(|(_, g)| *g) {
                 return Err(self.invalid(
@@ -243,12 +290,25 @@ impl Validator<'_> {
                     ));
                 }
             }
-            let jc = self.johnson_cook(&format!("{key}.johnson_cook"), jc)?;
+            let jc = self.johnson_cook(key, m, jc)?;
             return Ok(Some(Plasticity {
                 yield_stress: jc.a,
                 hardening_modulus: 0.0,
                 johnson_cook: Some(jc),
             }));
+        }
+        for (k, x) in [
+            ("specific_heat", m.specific_heat),
+            ("taylor_quinney", m.taylor_quinney),
+        ] {
+            if let Some(x) = x {
+                return Err(self.invalid(
+                    format!("{key}.{k}"),
+                    fmt_num(x),
+                    "adiabatic heating needs the Johnson-Cook flow stress's thermal softening: \
+                     johnson_cook = { ..., m, melt_temperature, room_temperature }",
+                ));
+            }
         }
         let Some(y) = m.yield_stress else {
             return Err(self.invalid(
@@ -269,8 +329,12 @@ impl Validator<'_> {
         }))
     }
 
-    /// The `johnson_cook = { a, b, n, c, reference_strain_rate }` table at `key`.
-    fn johnson_cook(&self, key: &str, v: &toml::Value) -> Result<JohnsonCook> {
+    /// The `johnson_cook = { a, b, n, c, reference_strain_rate }` table (with, for thermal
+    /// softening, `m`, `melt_temperature` and `room_temperature`) of material `mkey`, `m` its
+    /// table (for `specific_heat` and `taylor_quinney`).
+    fn johnson_cook(&self, mkey: &str, m: &RawMaterial, v: &toml::Value) -> Result<JohnsonCook> {
+        let key = format!("{mkey}.johnson_cook");
+        let key = key.as_str();
         let Some(t) = v.as_table() else {
             return Err(self.invalid(
                 key,
@@ -278,12 +342,22 @@ impl Validator<'_> {
                 "expected a table { a, b, n, c, reference_strain_rate }",
             ));
         };
-        const KEYS: [&str; 5] = ["a", "b", "n", "c", "reference_strain_rate"];
+        const KEYS: [&str; 8] = [
+            "a",
+            "b",
+            "n",
+            "c",
+            "reference_strain_rate",
+            "m",
+            "melt_temperature",
+            "room_temperature",
+        ];
         if let Some(k) = t.keys().find(|k| !KEYS.contains(&k.as_str())) {
             return Err(self.invalid(
                 format!("{key}.{k}"),
                 t[k].to_string(),
-                "unknown key (expected a, b, n, c, reference_strain_rate)",
+                "unknown key (expected a, b, n, c, reference_strain_rate and, for thermal \
+                 softening, m, melt_temperature, room_temperature)",
             ));
         }
         let get = |k: &str| -> Result<f64> {
@@ -315,7 +389,98 @@ impl Validator<'_> {
             n,
             c,
             reference_strain_rate,
+            thermal: self.thermal(mkey, m, t)?,
         })
+    }
+
+    /// The thermal softening of material `mkey` (table `m`) from its Johnson-Cook table `t`:
+    /// `m`, `melt_temperature` and `room_temperature` all or none; with them `specific_heat`
+    /// (required) and `taylor_quinney` (0.9 by default), refused without them.
+    fn thermal(
+        &self,
+        mkey: &str,
+        m: &RawMaterial,
+        t: &toml::map::Map<String, toml::Value>,
+    ) -> Result<Option<ThermalSoftening>> {
+        let key = format!("{mkey}.johnson_cook");
+        const KEYS: [&str; 3] = ["m", "melt_temperature", "room_temperature"];
+        let given: Vec<&str> = KEYS
+            .iter()
+            .copied()
+            .filter(|k| t.contains_key(*k))
+            .collect();
+        if given.is_empty() {
+            for (k, x) in [
+                ("specific_heat", m.specific_heat),
+                ("taylor_quinney", m.taylor_quinney),
+            ] {
+                if let Some(x) = x {
+                    return Err(self.invalid(
+                        format!("{mkey}.{k}"),
+                        fmt_num(x),
+                        "adiabatic heating needs the Johnson-Cook flow stress's thermal \
+                         softening: johnson_cook = { ..., m, melt_temperature, room_temperature }",
+                    ));
+                }
+            }
+            return Ok(None);
+        }
+        if let Some(k) = KEYS.iter().find(|k| !t.contains_key(**k)) {
+            return Err(self.invalid(
+                format!("{key}.{k}"),
+                "missing",
+                &format!(
+                    "thermal softening needs m, melt_temperature and room_temperature together \
+                     (given: {})",
+                    given.join(", ")
+                ),
+            ));
+        }
+        let num = |k: &str| -> Result<f64> {
+            let v = &t[k];
+            let x = number(v).ok_or_else(|| {
+                self.invalid(format!("{key}.{k}"), v.to_string(), "expected a number")
+            })?;
+            self.finite(&format!("{key}.{k}"), x)
+        };
+        let exponent = self.positive(&format!("{key}.m"), num("m")?)?;
+        let room_temperature =
+            self.non_negative(&format!("{key}.room_temperature"), num("room_temperature")?)?;
+        let melt_temperature = num("melt_temperature")?;
+        if melt_temperature <= room_temperature {
+            return Err(self.invalid(
+                format!("{key}.melt_temperature"),
+                fmt_num(melt_temperature),
+                &format!(
+                    "must exceed room_temperature ({} K)",
+                    fmt_num(room_temperature)
+                ),
+            ));
+        }
+        let Some(cp) = m.specific_heat else {
+            return Err(self.invalid(
+                format!("{mkey}.specific_heat"),
+                "missing",
+                "thermal softening heats the material adiabatically: give its specific_heat \
+                 (J/(kg K), > 0)",
+            ));
+        };
+        let specific_heat = self.positive(&format!("{mkey}.specific_heat"), cp)?;
+        let taylor_quinney = m.taylor_quinney.unwrap_or(ThermalSoftening::TAYLOR_QUINNEY);
+        if !(0.0..=1.0).contains(&taylor_quinney) {
+            return Err(self.invalid(
+                format!("{mkey}.taylor_quinney"),
+                fmt_num(taylor_quinney),
+                "must lie in [0, 1] (the fraction of the plastic work that heats)",
+            ));
+        }
+        Ok(Some(ThermalSoftening {
+            m: exponent,
+            melt_temperature,
+            room_temperature,
+            specific_heat,
+            taylor_quinney,
+        }))
     }
 
     /// The `failure = { plastic_strain, johnson_cook, principal_strain, tensile_pressure }`

@@ -39,6 +39,7 @@ pub use contact::{
 };
 pub use material::{
     FailureCriteria, JohnsonCook, JohnsonCookDamage, Material, MaterialModel, Plasticity,
+    ThermalSoftening,
 };
 pub use mesh::{DiskRefinement, MeshSpec};
 pub use run::{

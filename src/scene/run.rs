@@ -1,5 +1,6 @@
 //! `[run]`: run control (README, "Scene format", `[run]`): the raw table, [`RunSettings`] with
-//! its defaults and [`FieldFormat`], and their validation (bulk viscosity, mass damping, gravity).
+//! its defaults and [`FieldFormat`], and their validation (bulk viscosity, mass damping, gravity,
+//! erosion).
 //! Host-side only, no GPU twin.
 
 use serde::Deserialize;
@@ -38,6 +39,7 @@ pub(super) struct RawRun {
     mass_damping: Option<f64>,
     gravity: Option<toml::Value>,
     gravity_ramp: Option<f64>,
+    erosion: Option<toml::Value>,
 }
 
 /// The `bulk_viscosity` table of `[run]`.
@@ -91,6 +93,9 @@ pub struct RunSettings {
     pub gravity: [f64; 2],
     /// Duration of a linear ramp of gravity from 0 (s; 0: gravity in full from t = 0).
     pub gravity_ramp: f64,
+    /// `erosion = { inverted = true }`: an element about to invert erodes (as a failed element,
+    /// counted apart) instead of stopping the run (false: the run stops naming it).
+    pub erode_inverted: bool,
 }
 
 impl Validator<'_> {
@@ -216,6 +221,33 @@ impl Validator<'_> {
                 self.positive("run.gravity_ramp", t)?
             }
         };
+        let erode_inverted = match &r.erosion {
+            None => false,
+            Some(v) => {
+                let expected = "expected a table { inverted = true or false }";
+                let Some(t) = v.as_table() else {
+                    return Err(self.invalid("run.erosion", v.to_string(), expected));
+                };
+                if let Some(k) = t.keys().find(|k| k.as_str() != "inverted") {
+                    return Err(self.invalid(
+                        format!("run.erosion.{k}"),
+                        t[k].to_string(),
+                        "unknown key (expected inverted)",
+                    ));
+                }
+                match t.get("inverted") {
+                    None => return Err(self.invalid("run.erosion", "{}", expected)),
+                    Some(toml::Value::Boolean(b)) => *b,
+                    Some(x) => {
+                        return Err(self.invalid(
+                            "run.erosion.inverted",
+                            x.to_string(),
+                            "expected true or false",
+                        ))
+                    }
+                }
+            }
+        };
         Ok(RunSettings {
             end_time,
             time_step_scale,
@@ -230,6 +262,7 @@ impl Validator<'_> {
             mass_damping,
             gravity,
             gravity_ramp,
+            erode_inverted,
         })
     }
 }

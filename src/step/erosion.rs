@@ -1,5 +1,6 @@
 //! The CPU reference's erosion state ([`Erosion`]): which elements failed and left the mesh, the
-//! Johnson-Cook damage, and the energy the eroded elements took with them. The failure criteria
+//! Johnson-Cook damage, and the energy the eroded elements took with them (with, apart, how many
+//! eroded because they were about to invert: `run.erosion.inverted`). The failure criteria
 //! themselves are [`crate::element::failure`]; the solver's element stage
 //! ([`super::cpu::CpuSolver`]) asks `Erosion::fails` and records with `Erosion::erode`.
 
@@ -25,6 +26,10 @@ pub struct Erosion {
     /// the half-step work of their unapplied last forces).
     #[serde(default)]
     pub(crate) energy: f64,
+    /// Of `count`, the elements eroded because they were about to invert
+    /// (`run.erosion.inverted`).
+    #[serde(default)]
+    pub(crate) inverted: u64,
 }
 
 impl Erosion {
@@ -40,6 +45,7 @@ impl Erosion {
             },
             count: 0,
             energy: 0.0,
+            inverted: 0,
         }
     }
 
@@ -78,7 +84,7 @@ impl Erosion {
             out.plastic.alpha,
             dt,
             damage,
-            0.0,
+            model.params(e).t_star(out.plastic.heat),
         );
         if let Some(d) = self.damage.get_mut(e) {
             *d = check.damage;
@@ -98,5 +104,6 @@ impl Erosion {
         self.eroded.len() == fresh.eroded.len()
             && self.damage.len() == fresh.damage.len()
             && self.count as usize <= self.eroded.len()
+            && self.inverted <= self.count
     }
 }

@@ -283,6 +283,15 @@ pub trait Solver {
         Ok(Vec::new())
     }
 
+    /// Elements eroded so far because they were about to invert (`run.erosion.inverted`; 0
+    /// without): a part of [`Counters::eroded_elements`].
+    ///
+    /// # Errors
+    /// A failed device readback.
+    fn eroded_inverted_now(&mut self) -> Result<u64> {
+        Ok(0)
+    }
+
     /// Advances at least one step, until one or more events happened (or, without one, for about
     /// [`ADVANCE_SECONDS`]), and appends them.
     ///

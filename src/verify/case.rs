@@ -174,6 +174,12 @@ pub enum MetricKind {
     /// `eroded_elements` is not 0 (with a row every step, the t_n of the step whose state met
     /// the failure criterion).
     ErosionTime,
+    /// Johnson-Cook thermal softening with adiabatic heating (REFERENCES.md section 11): the
+    /// largest |T* - (1 - exp(-k W0(eps_p)))| over the elements of `body` at the end, T* their
+    /// homologous temperature and eps_p their equivalent plastic strain, W0 the work of the
+    /// room-temperature flow stress to eps_p and k = beta / (rho c_p (T_m - T_r)): the exact
+    /// coupled adiabatic solution for m = 1 without the rate term (c = 0).
+    ThermalSofteningError,
 }
 
 /// A bound value: a number, or an expression over the run's variables (e.g. `"0.9 / n"`).
@@ -405,6 +411,7 @@ impl Case {
                 | K::MaxCoordinate
                 | K::PeakPlasticStrain
                 | K::UniaxialJ2Error
+                | K::ThermalSofteningError
                 | K::StopTime
                 | K::Displacement
                 | K::Acceleration => need("body", m.body.is_some())?,

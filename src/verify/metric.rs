@@ -395,6 +395,32 @@ pub fn measure(m: &Metric, r: &RunData<'_>) -> std::result::Result<f64, String> 
             }
             err
         }
+        MetricKind::ThermalSofteningError => {
+            let b = &r.model.bodies[body()?];
+            let p = &b.params;
+            if !(p.has_thermal() && p.jc_m == 1.0 && p.jc_c == 0.0) {
+                return Err(format!(
+                    "body {:?}: the closed form needs Johnson-Cook thermal softening with m = 1 \
+                     and no rate term (c = 0)",
+                    b.name
+                ));
+            }
+            if r.plastic.is_empty() {
+                return Err("the run has no plastic state".into());
+            }
+            let k = p.heating / p.melt_rise;
+            let mut err = 0.0f64;
+            for e in b.elements.clone() {
+                let s = &r.plastic[e];
+                let a = s.alpha;
+                let w0 = p.yield_stress * a
+                    + 0.5 * p.hardening * a * a
+                    + p.jc_b * a.powf(p.jc_n + 1.0) / (p.jc_n + 1.0);
+                let closed = -(-k * w0).exp_m1();
+                err = err.max((p.t_star(s.heat) - closed).abs());
+            }
+            err
+        }
         MetricKind::UniaxialJ2Error => {
             let b = &r.model.bodies[body()?];
             let pr = &b.params;

@@ -99,7 +99,7 @@ pub struct Outcome {
 
 /// The case files of `assets/verification/`, built into the binary so that `ricochet verify` runs
 /// from any folder: (file name, text), sorted by file name.
-pub const EMBEDDED: [(&str, &str); 17] = [
+pub const EMBEDDED: [(&str, &str); 18] = [
     (
         "disk_wall_10ms.toml",
         include_str!("../../assets/verification/disk_wall_10ms.toml"),
@@ -167,6 +167,10 @@ pub const EMBEDDED: [(&str, &str); 17] = [
     (
         "taylor_bar.toml",
         include_str!("../../assets/verification/taylor_bar.toml"),
+    ),
+    (
+        "thermal_softening.toml",
+        include_str!("../../assets/verification/thermal_softening.toml"),
     ),
 ];
 

@@ -178,11 +178,12 @@ fn bad_plastic_materials() {
     expect_rejected(
         "johnson_cook_unknown_key",
         &plastic(
-            "johnson_cook = { a = 9.0e7, b = 2.92e8, n = 0.31, c = 0.025, reference_strain_rate = 1.0, m = 1.09 }",
+            "johnson_cook = { a = 9.0e7, b = 2.92e8, n = 0.31, c = 0.025, reference_strain_rate = 1.0, d = 1.09 }",
         ),
-        &["material[0].johnson_cook.m", "unknown key"],
+        &["material[0].johnson_cook.d", "unknown key"],
     );
     bad_failure_keys();
+    bad_thermal_keys();
     expect_rejected(
         "elastic_with_yield",
         &variant(
@@ -1717,6 +1718,151 @@ fn a_node_at_1e300_in_an_explicit_mesh_is_refused_at_once() {
 }
 
 /// The `failure` table of a material: every bad value exits 2 naming the key and the value.
+/// Johnson-Cook thermal softening (`m`, `melt_temperature`, `room_temperature` in the table) and
+/// adiabatic heating (`specific_heat`, `taylor_quinney` beside it).
+fn bad_thermal_keys() {
+    let jc = |thermal: &str, keys: &str| {
+        plastic(&format!(
+            "johnson_cook = {{ a = 9.0e7, b = 2.92e8, n = 0.31, c = 0.025, reference_strain_rate = 1.0{thermal} }}\n{keys}"
+        ))
+    };
+    let full = ", m = 1.09, melt_temperature = 1356.0, room_temperature = 293.0";
+    expect_accepted(
+        "thermal_ok",
+        &jc(full, "specific_heat = 383.0\ntaylor_quinney = 0.9"),
+        true,
+    );
+    expect_accepted(
+        "thermal_default_beta_ok",
+        &jc(full, "specific_heat = 383.0"),
+        false,
+    );
+    let cases: [(&str, String, &[&str]); 11] = [
+        (
+            "thermal_zero_m",
+            jc(
+                ", m = 0.0, melt_temperature = 1356.0, room_temperature = 293.0",
+                "specific_heat = 383.0",
+            ),
+            &["material[0].johnson_cook.m", "0.0"],
+        ),
+        (
+            "thermal_negative_m",
+            jc(
+                ", m = -1.0, melt_temperature = 1356.0, room_temperature = 293.0",
+                "specific_heat = 383.0",
+            ),
+            &["material[0].johnson_cook.m", "-1.0"],
+        ),
+        (
+            "thermal_melt_below_room",
+            jc(
+                ", m = 1.09, melt_temperature = 250.0, room_temperature = 293.0",
+                "specific_heat = 383.0",
+            ),
+            &[
+                "material[0].johnson_cook.melt_temperature",
+                "250.0",
+                "room_temperature",
+            ],
+        ),
+        (
+            "thermal_melt_at_room",
+            jc(
+                ", m = 1.09, melt_temperature = 293.0, room_temperature = 293.0",
+                "specific_heat = 383.0",
+            ),
+            &["material[0].johnson_cook.melt_temperature", "293.0"],
+        ),
+        (
+            "thermal_m_alone",
+            jc(", m = 1.09", "specific_heat = 383.0"),
+            &["material[0].johnson_cook.melt_temperature", "missing"],
+        ),
+        (
+            "thermal_no_specific_heat",
+            jc(full, ""),
+            &["material[0].specific_heat", "missing"],
+        ),
+        (
+            "thermal_zero_specific_heat",
+            jc(full, "specific_heat = 0.0"),
+            &["material[0].specific_heat", "0.0"],
+        ),
+        (
+            "thermal_beta_above_one",
+            jc(full, "specific_heat = 383.0\ntaylor_quinney = 1.5"),
+            &["material[0].taylor_quinney", "1.5"],
+        ),
+        (
+            "thermal_beta_negative",
+            jc(full, "specific_heat = 383.0\ntaylor_quinney = -0.1"),
+            &["material[0].taylor_quinney", "-0.1"],
+        ),
+        (
+            "heating_without_thermal_softening",
+            jc("", "specific_heat = 383.0"),
+            &["material[0].specific_heat", "383.0", "m, melt_temperature"],
+        ),
+        (
+            "heating_without_johnson_cook",
+            plastic("yield_stress = 2.5e8\ntaylor_quinney = 0.9"),
+            &["material[0].taylor_quinney", "0.9", "johnson_cook"],
+        ),
+    ];
+    for (case, text, needles) in &cases {
+        expect_rejected(case, text, needles);
+    }
+    expect_rejected(
+        "heating_on_an_elastic_material",
+        &variant(
+            "poisson_ratio = 0.3",
+            "poisson_ratio = 0.3\nspecific_heat = 383.0",
+        ),
+        &["material[0].specific_heat", "j2_plastic"],
+    );
+}
+
+#[test]
+fn bad_erosion_options_name_the_key_and_value() {
+    let with = |erosion: &str| {
+        variant(
+            "end_time = 1.0e-5",
+            &format!("end_time = 1.0e-5\n{erosion}"),
+        )
+    };
+    expect_accepted(
+        "erosion_inverted_ok",
+        &with("erosion = { inverted = true }"),
+        true,
+    );
+    expect_accepted(
+        "erosion_inverted_off_ok",
+        &with("erosion = { inverted = false }"),
+        false,
+    );
+    expect_rejected(
+        "erosion_not_a_table",
+        &with("erosion = true"),
+        &["run.erosion", "true"],
+    );
+    expect_rejected(
+        "erosion_empty",
+        &with("erosion = {}"),
+        &["run.erosion", "{}"],
+    );
+    expect_rejected(
+        "erosion_inverted_not_a_boolean",
+        &with("erosion = { inverted = 1 }"),
+        &["run.erosion.inverted", "1", "true or false"],
+    );
+    expect_rejected(
+        "erosion_unknown_key",
+        &with("erosion = { inverted = true, min_time_step = 1.0e-9 }"),
+        &["run.erosion.min_time_step", "unknown key"],
+    );
+}
+
 fn bad_failure_keys() {
     let yielding = |failure: &str| plastic(&format!("yield_stress = 2.5e8\nfailure = {failure}"));
     let jc = "johnson_cook = { d1 = 0.54, d2 = 4.89, d3 = -3.03, d4 = 0.014, d5 = 1.12 }";

@@ -6,7 +6,8 @@
 //! and a restart from a checkpoint taken after some elements eroded ends with the outputs of the
 //! run never stopped; in neo-Hookean and linear elastic blocks the principal-strain and spall
 //! limits erode the CPU's elements. A scene without failure compiles neither the check nor its
-//! buffers.
+//! buffers. With Johnson-Cook thermal softening a sheared element heats as on the CPU and its
+//! damage's d5 term erodes it in the CPU's step, the same bits twice.
 
 use super::*;
 
@@ -332,4 +333,117 @@ fn the_gpu_refuses_failure_with_contact_which_only_the_cpu_follows() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("eroding contact"), "{stderr}");
+}
+
+/// The thermal softening verification case (`assets/verification/thermal_softening.toml`) at
+/// `n` = 1, with Johnson-Cook damage whose d5 term reads the heated T*, a history row every step
+/// and a snapshot at the end.
+fn thermal_scene() -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/verification/thermal_softening.toml");
+    let case = ricochet::verify::case::Case::read(&path).unwrap();
+    let level = [("n".to_string(), 1.0)].into_iter().collect();
+    case.expand(&level, "none")
+        .unwrap()
+        .replace(
+            "history_interval = 2.5e-6",
+            "history_interval = 1.0e-8\nfield_interval = 2.5e-5",
+        )
+        .replace(
+            "taylor_quinney = 0.9\n",
+            "taylor_quinney = 0.9\nfailure = { johnson_cook = { d1 = 0.3, d2 = 0.2, d3 = 0.0, d4 = 0.0, d5 = 2.0 } }\n",
+        )
+}
+
+#[test]
+fn gpu_thermal_softening_matches_the_cpu_reference_and_repeats_bit_for_bit() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text = thermal_scene();
+    let (scene, model, plan) = load(&text, "thermal.toml");
+    let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
+    let (cs, csnap) = run_to_end(&mut cpu);
+    let mut gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+    let (gs, gsnap) = run_to_end(&mut gpu);
+    assert_eq!(cs.len(), gs.len(), "history rows");
+    // The heated element erodes (its d5 term at T* ~ 0.1) in the CPU's step, within one.
+    let first = |s: &[Sample]| {
+        s.iter()
+            .position(|r| r.eroded_elements > 0)
+            .expect("eroded")
+    };
+    let (c, g) = (first(&cs), first(&gs));
+    println!(
+        "eroded at step {} on the CPU, {} on the GPU",
+        cs[c].step, gs[g].step
+    );
+    assert!(c.abs_diff(g) <= 1, "CPU row {c}, GPU row {g}");
+    // The temperature it eroded at: its T* the CPU's to f32 round-off of the heating sum.
+    let (cp, gp) = (
+        &csnap.last().unwrap().plastic,
+        &gsnap.last().unwrap().plastic,
+    );
+    assert!(cp[0].heat > 50.0, "{:?}", cp[0]);
+    let rel = (gp[0].heat - cp[0].heat).abs() / cp[0].heat;
+    println!(
+        "temperature rise {} K (CPU {} K), {rel:e} apart",
+        gp[0].heat, cp[0].heat
+    );
+    assert!(rel < 1e-2, "{:?} vs {:?}", gp[0], cp[0]);
+    // A second GPU run: the same bits.
+    let mut again = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+    let (gs2, gsnap2) = run_to_end(&mut again);
+    assert_eq!(gs, gs2, "two GPU runs differ");
+    assert_eq!(gsnap, gsnap2, "two GPU runs' snapshots differ");
+}
+
+#[test]
+fn gpu_erodes_an_element_about_to_invert_in_the_cpus_step_and_repeats_bit_for_bit() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text = failure_scene::crushed_corner(100.0, 8.0e-5, "erosion = { inverted = true }");
+    let (scene, model, plan) = load(&text, "crushed.toml");
+    let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
+    let (cs, _) = run_to_end(&mut cpu);
+    let mut gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+    let (gs, gsnap) = run_to_end(&mut gpu);
+    assert_eq!(cs.len(), gs.len(), "history rows");
+    // A row every step: the same step erodes it on both backends, counted as inverted.
+    let first = |s: &[Sample]| {
+        s.iter()
+            .position(|r| r.eroded_elements > 0)
+            .expect("eroded")
+    };
+    let (c, g) = (first(&cs), first(&gs));
+    println!(
+        "eroded at step {} on the CPU, {} on the GPU",
+        cs[c].step, gs[g].step
+    );
+    assert_eq!(cs[c].step, gs[g].step);
+    assert_eq!(gs.last().unwrap().eroded_elements, 1);
+    assert_eq!(cpu.eroded_inverted_now().unwrap(), 1);
+    assert_eq!(gpu.eroded_inverted_now().unwrap(), 1);
+    // The energy balances with the eroded energy counted, as on the CPU.
+    let (mut ca, mut ga) = (EnergyAudit::default(), EnergyAudit::default());
+    let (mut c_end, mut g_end) = (0.0, 0.0);
+    for (c, g) in cs.iter().zip(&gs) {
+        c_end = ca.error(c);
+        g_end = ga.error(g);
+    }
+    let (cl, gl) = (cs.last().unwrap(), gs.last().unwrap());
+    println!(
+        "eroded energy {:e} J (CPU {:e}), energy error GPU {:e} ({g_end:e} at the end), CPU {:e} \
+         ({c_end:e})",
+        gl.eroded_energy, cl.eroded_energy, ga.max_error, ca.max_error
+    );
+    // The largest error is the start-up's (the first step's, 1.3e-3 on the CPU); after the
+    // erosion the balance closes with the eroded energy counted.
+    assert!(ga.max_error < 2e-3 && ca.max_error < 2e-3);
+    assert!(g_end < 1e-5 && c_end < 1e-9, "{g_end:e} {c_end:e}");
+    assert!((gl.eroded_energy - cl.eroded_energy).abs() < 1e-3 * cl.eroded_energy);
+    // A second GPU run: the same bits.
+    let mut again = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+    let (gs2, gsnap2) = run_to_end(&mut again);
+    assert_eq!(gs, gs2, "two GPU runs differ");
+    assert_eq!(gsnap, gsnap2, "two GPU runs' snapshots differ");
 }

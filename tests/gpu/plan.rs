@@ -166,6 +166,8 @@ fn gpu_allocates_exactly_the_buffers_and_kernels_the_plan_uses() {
             assert_eq!(k.features.dissipation, plan.has_dissipation(), "{name}");
             assert_eq!(k.features.fields, plan.has(Fields), "{name}");
             assert_eq!(k.features.failure, plan.has(Failure), "{name}");
+            let thermal = model.bodies.iter().any(|b| b.params.has_thermal());
+            assert_eq!(k.features.thermal, thermal, "{name}");
         }
     }
 }

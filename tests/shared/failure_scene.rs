@@ -148,3 +148,49 @@ velocity_gradient = [[0.0, 0.0], [0.0, {rate:e}]]
         l = 4.0 * SIDE,
     )
 }
+
+/// One element of side [`SIDE`] of the aluminium (linear elastic, so that its energies stay
+/// finite past inversion) whose top-right corner is pushed at `speed` (m/s) along the diagonal
+/// towards the fixed bottom-left one, the other two held: the corner crosses the diagonal
+/// between its neighbours, where the element inverts (a corner Jacobian of 0) while its area is
+/// still half the square, at t = SIDE / (2 speed). `erosion`: the `[run]` line of the option
+/// (or none). A history row every step until `end_time`.
+pub fn crushed_corner(speed: f64, end_time: f64, erosion: &str) -> String {
+    format!(
+        r#"
+[run]
+end_time = {end_time:e}
+history_interval = 1e-9
+{erosion}
+
+[[material]]
+name = "aluminium"
+model = "linear_elastic"
+density = 2700.0
+youngs_modulus = {E:e}
+poisson_ratio = {NU}
+
+[[body]]
+name = "block"
+material = "aluminium"
+mesh = {{ rectangle = {{ origin = [0.0, 0.0], size = [{SIDE:e}, {SIDE:e}], cells = [1, 1] }} }}
+
+[[boundary]]
+body = "block"
+region = {{ min = [-1.0, -1.0], max = [1.0, 1.0e-9] }}
+velocity = {{ x = 0.0, y = 0.0 }}
+
+[[boundary]]
+body = "block"
+region = {{ min = [-1.0, {lo:e}], max = [1.0e-9, 1.0] }}
+velocity = {{ x = 0.0, y = 0.0 }}
+
+[[boundary]]
+body = "block"
+region = {{ min = [{lo:e}, {lo:e}], max = [1.0, 1.0] }}
+velocity = {{ x = {v:e}, y = {v:e} }}
+"#,
+        lo = SIDE - 1e-9,
+        v = -speed,
+    )
+}

@@ -40,7 +40,8 @@ pub const MIN_BATCH: u32 = 32;
 
 /// Why the GPU refuses a scene with both failure and contact: its contact surfaces would stay as
 /// meshed while elements erode (the CPU reference follows erosion: `contact::erosion`).
-pub const ERODING_CONTACT: &str = "eroding contact (a material's `failure` in a scene with \
+pub const ERODING_CONTACT: &str = "eroding contact (a material's `failure`, or \
+     `run.erosion.inverted`, in a scene with \
      `[[contact]]` or `[[rigid_wall]]`) runs on the CPU reference only so far: the GPU erodes \
      elements but does not yet move its contact surfaces onto the edges they expose; use \
      --backend cpu";
@@ -154,6 +155,7 @@ impl GpuSolver {
             plane_stress: any(&|b| b.params.formulation == Formulation::PlaneStress),
             hourglass_stiffness: any(&|b| b.params.hourglass == HourglassForm::Stiffness),
             failure: plan.has(Stage::Failure),
+            thermal: any(&|b| b.params.has_thermal()),
             contact_springs: model
                 .contacts
                 .iter()
@@ -558,6 +560,10 @@ impl Solver for GpuSolver {
 
     fn plastic_now(&mut self) -> Result<Vec<PlasticState>> {
         self.plastic_state()
+    }
+
+    fn eroded_inverted_now(&mut self) -> Result<u64> {
+        self.eroded_inverted()
     }
 
     fn counters(&self) -> Counters {

@@ -72,8 +72,20 @@ impl GpuSolver {
         Ok((eroded, damage))
     }
 
+    /// Elements eroded because they were about to invert (`run.erosion.inverted`): the erosion
+    /// state's fourth word (one readback; 0 without erosion).
+    pub(super) fn eroded_inverted(&mut self) -> Result<u64> {
+        let Some(buf) = self.state.erosion.clone() else {
+            return Ok(0);
+        };
+        let ne = self.state.params.n_elems as u64;
+        let bytes = self.read_copies("erosion_readback", &[(&buf, 0, 16 * ne)])?;
+        let f: &[f32] = bytemuck::cast_slice(&bytes);
+        Ok((0..ne as usize).filter(|&e| f[4 * e + 3] != 0.0).count() as u64)
+    }
+
     /// The plastic state of every element (empty without a plastic body): C_p^-1 = I + the
-    /// stored deviation, and alpha.
+    /// stored deviation, alpha and the temperature rise (0 without thermal softening).
     pub(super) fn plastic_state(&mut self) -> Result<Vec<PlasticState>> {
         let Some(buf) = self.state.plastic.clone() else {
             return Ok(Vec::new());
@@ -92,6 +104,7 @@ impl GpuSolver {
                         1.0 + d[3] as f64,
                     ],
                     alpha: f[8 * e + 4] as f64,
+                    heat: f[8 * e + 6] as f64,
                 }
             })
             .collect())

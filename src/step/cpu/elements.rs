@@ -73,17 +73,20 @@ impl CpuSolver {
                 Dissipation::default()
             };
             let out = self.evaluate(e, &prev, self.s.dt_prev);
-            if failure && {
+            let failed = failure && {
                 let alpha_old = self.s.plastic.get(e).map_or(0.0, |p| p.alpha);
                 self.s
                     .erosion
                     .fails(&self.model, e, &out, alpha_old, self.s.dt_prev)
-            } {
-                // Eroded at once: no force, no stable step from now on. Its strain and stored
-                // hourglass energy leave with it, less the work its forces f_n would have done
-                // over the half step before t_n: the energy of the interval pairs f_{n-1} and
-                // f_n (trapezoidal), and f_n is never applied, so that the balance closes as on
-                // any other step. Its viscous and plastic work of the step are done.
+            };
+            let inverted = out.min_corner.is_nan() || out.min_corner <= 0.0;
+            if failed || (inverted && self.model.erode_inverted) {
+                // Eroded at once (failed, or about to invert with `run.erosion.inverted`): no
+                // force, no stable step from now on. Its strain and stored hourglass energy
+                // leave with it, less the work its forces f_n would have done over the half step
+                // before t_n: the energy of the interval pairs f_{n-1} and f_n (trapezoidal),
+                // and f_n is never applied, so that the balance closes as on any other step. Its
+                // viscous and plastic work of the step are done.
                 let v = self.gather(e).1;
                 let half_work: f64 = (0..4)
                     .map(|a| out.force[a][0] * v[a][0] + out.force[a][1] * v[a][1])
@@ -102,9 +105,12 @@ impl CpuSolver {
                 self.s
                     .erosion
                     .erode(e, out.strain_energy + out.hourglass_stored + half_work);
+                if !failed {
+                    self.s.erosion.inverted += 1;
+                }
                 continue;
             }
-            if out.min_corner.is_nan() || out.min_corner <= 0.0 {
+            if inverted {
                 return Err(format!(
                     "{} inverted: smallest corner Jacobian ratio {:.3e}; reduce time_step_scale, \
                      refine the mesh or raise the hourglass coefficient",

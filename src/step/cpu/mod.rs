@@ -720,4 +720,8 @@ impl Solver for CpuSolver {
     fn plastic_now(&mut self) -> Result<Vec<PlasticState>> {
         Ok(self.s.plastic.clone())
     }
+
+    fn eroded_inverted_now(&mut self) -> Result<u64> {
+        Ok(self.s.erosion.inverted)
+    }
 }
