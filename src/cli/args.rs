@@ -253,8 +253,9 @@ pub struct VerifyArgs {
     #[arg(long)]
     pub adapter: Option<String>,
     /// Runs at a time: 1 (the default) runs them one after another; 2 runs the GPU's beside
-    /// the CPU's (and with one backend, two of its runs at once). The results and the report
-    /// are the same but for the wall times, each measured while other runs shared the machine.
+    /// the CPU's, each worker taking the other's runs once its own are done (with one backend,
+    /// two of its runs at once). The results and the report are the same but for the wall
+    /// times, each measured while other runs shared the machine.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub jobs: u32,
 }

@@ -41,9 +41,10 @@ pub struct Options {
     /// GPU adapter name substring.
     pub adapter: Option<String>,
     /// Runs at a time: 1 runs them one after another (the default: wall times undisturbed); more
-    /// runs the GPU's runs one after another beside `jobs - 1` workers taking the CPU's (with
-    /// one backend, `jobs` workers). Rows, `results.csv` and the report come out in the same
-    /// order either way; only the wall times (each run's own, measured while others ran) change.
+    /// runs the GPU's runs one after another beside `jobs - 1` workers taking the CPU's, each
+    /// worker taking the other backend's runs once its own are done (with one backend, `jobs`
+    /// workers). Rows, `results.csv` and the report come out in the same order either way; only
+    /// the wall times (each run's own, measured while others ran) change.
     pub jobs: usize,
 }
 
@@ -368,28 +369,35 @@ fn run_jobs(
     use std::sync::atomic::{AtomicUsize, Ordering};
     let gpu: Vec<usize> = (0..list.len()).filter(|&i| list[i].ctx.is_some()).collect();
     let cpu: Vec<usize> = (0..list.len()).filter(|&i| list[i].ctx.is_none()).collect();
-    // The device's runs one after another in one worker; the CPU's shared by the others.
-    let cpu_workers = if gpu.is_empty() { jobs } else { jobs - 1 };
     let (next_cpu, next_gpu) = (AtomicUsize::new(0), AtomicUsize::new(0));
     let (tx, rx) = std::sync::mpsc::channel::<(usize, Result<Vec<Row>>)>();
     let mut results: Vec<Option<Result<Vec<Row>>>> = (0..list.len()).map(|_| None).collect();
     std::thread::scope(|scope| {
-        let worker = |queue: &'_ [usize], next: &'_ AtomicUsize, tx: std::sync::mpsc::Sender<_>| {
-            while let Some(&i) = queue.get(next.fetch_add(1, Ordering::Relaxed)) {
-                if tx.send((i, list[i].run(scratch))).is_err() {
-                    break;
+        // Each worker takes its own queue's runs, then the other's: the device's runs go one
+        // after another in one worker beside `jobs - 1` taking the CPU's, and a worker whose
+        // queue is empty helps with the other (on a CPU adapter the device's runs are the long
+        // ones, and they would otherwise end the suite on one core).
+        let worker = |queues: [(&'_ [usize], &'_ AtomicUsize); 2],
+                      tx: std::sync::mpsc::Sender<_>| {
+            for (queue, next) in queues {
+                while let Some(&i) = queue.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    if tx.send((i, list[i].run(scratch))).is_err() {
+                        return;
+                    }
                 }
             }
         };
-        if !gpu.is_empty() {
+        let gpu_first = [(&gpu[..], &next_gpu), (&cpu[..], &next_cpu)];
+        let cpu_first = [(&cpu[..], &next_cpu), (&gpu[..], &next_gpu)];
+        let gpu_workers = usize::from(!gpu.is_empty());
+        for w in 0..jobs.min(list.len()) {
             let tx = tx.clone();
-            let (queue, next) = (&gpu, &next_gpu);
-            scope.spawn(move || worker(queue, next, tx));
-        }
-        for _ in 0..cpu_workers.max(1).min(cpu.len()) {
-            let tx = tx.clone();
-            let (queue, next) = (&cpu, &next_cpu);
-            scope.spawn(move || worker(queue, next, tx));
+            let queues = if w < gpu_workers {
+                gpu_first
+            } else {
+                cpu_first
+            };
+            scope.spawn(move || worker(queues, tx));
         }
         drop(tx);
         for (i, rows) in rx {
