@@ -301,21 +301,26 @@ print(int(e.sum()), len(e), float(abs(vm[e == 1]).max()) if e.sum() else 0.0, fl
 
 use crate::restart::shared_restart;
 
-#[test]
-fn a_run_with_erosion_restarts_to_the_same_outputs() {
-    // Interrupted halfway, after some elements eroded: the eroded flags and damage are part of
-    // the checkpoint, and the restart ends with the outputs of the run never stopped.
-    let text = stretching_block(2000.0, 2.0e-5, 0.01).replace(
-        "plastic_strain = 0.01",
-        "plastic_strain = 0.01, johnson_cook = { d1 = 0.05, d2 = 0.01, d3 = -1.5, d4 = 0.0, d5 = 0.0 }",
-    );
-    let base = tmp_dir("failure-restart");
-    let path = base.join("block.toml");
-    std::fs::write(&path, &text).unwrap();
+/// Runs the scene `text` straight through with the binary into `base/a`, and on the CPU solver
+/// interrupted halfway into `base/b` (a checkpoint to restart from); returns `base`, `a`, `b`,
+/// the model and the interrupted solver.
+fn straight_and_interrupted(
+    text: &str,
+    name: &str,
+) -> (
+    std::path::PathBuf,
+    std::path::PathBuf,
+    std::path::PathBuf,
+    ricochet::model::Model,
+    CpuSolver,
+) {
+    let base = tmp_dir(name);
+    let path = base.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
     let a = base.join("a");
     let o = run_cpu(&path, &a, &[]);
     assert_eq!(o.status.code(), Some(0), "{o:?}");
-    let (scene, model, plan) = build(&text);
+    let (scene, model, plan) = build(text);
     let mut solver = CpuSolver::new(model.clone(), plan.clone(), ricochet::run::schedule(&scene));
     let b = base.join("b");
     shared_restart::run_interrupted_halfway(
@@ -325,9 +330,21 @@ fn a_run_with_erosion_restarts_to_the_same_outputs() {
         &mut solver,
         &b,
         &path,
-        &text,
+        text,
         None,
     );
+    (base, a, b, model, solver)
+}
+
+#[test]
+fn a_run_with_erosion_restarts_to_the_same_outputs() {
+    // Interrupted halfway, after some elements eroded: the eroded flags and damage are part of
+    // the checkpoint, and the restart ends with the outputs of the run never stopped.
+    let text = stretching_block(2000.0, 2.0e-5, 0.01).replace(
+        "plastic_strain = 0.01",
+        "plastic_strain = 0.01, johnson_cook = { d1 = 0.05, d2 = 0.01, d3 = -1.5, d4 = 0.0, d5 = 0.0 }",
+    );
+    let (base, a, b, model, solver) = straight_and_interrupted(&text, "failure-restart");
     assert!(
         solver.eroded_count() > 0,
         "nothing eroded by the interruption"
@@ -481,25 +498,7 @@ fn a_run_with_thermal_softening_restarts_to_the_same_outputs() {
         "history_interval = 2.5e-6",
         "history_interval = 2.5e-6\nfield_interval = 1.0e-5",
     );
-    let base = tmp_dir("thermal-restart");
-    let path = base.join("thermal.toml");
-    std::fs::write(&path, &text).unwrap();
-    let a = base.join("a");
-    let o = run_cpu(&path, &a, &[]);
-    assert_eq!(o.status.code(), Some(0), "{o:?}");
-    let (scene, model, plan) = build(&text);
-    let mut solver = CpuSolver::new(model.clone(), plan.clone(), ricochet::run::schedule(&scene));
-    let b = base.join("b");
-    shared_restart::run_interrupted_halfway(
-        &scene,
-        &model,
-        &plan,
-        &mut solver,
-        &b,
-        &path,
-        &text,
-        None,
-    );
+    let (base, a, b, _, mut solver) = straight_and_interrupted(&text, "thermal-restart");
     assert!(solver.plastic_now().unwrap()[0].heat > 10.0);
     let o = run_bin(&["run", "--restart", b.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{o:?}");
