@@ -355,6 +355,22 @@ fn thermal_scene() -> String {
         )
 }
 
+/// The first history row with an eroded element in the CPU's and the GPU's samples (printing
+/// their steps).
+fn first_eroded_rows(cs: &[Sample], gs: &[Sample]) -> (usize, usize) {
+    let first = |s: &[Sample]| {
+        s.iter()
+            .position(|r| r.eroded_elements > 0)
+            .expect("eroded")
+    };
+    let (c, g) = (first(cs), first(gs));
+    println!(
+        "eroded at step {} on the CPU, {} on the GPU",
+        cs[c].step, gs[g].step
+    );
+    (c, g)
+}
+
 #[test]
 fn gpu_thermal_softening_matches_the_cpu_reference_and_repeats_bit_for_bit() {
     let Some(ctx) = context() else { return };
@@ -367,16 +383,7 @@ fn gpu_thermal_softening_matches_the_cpu_reference_and_repeats_bit_for_bit() {
     let (gs, gsnap) = run_to_end(&mut gpu);
     assert_eq!(cs.len(), gs.len(), "history rows");
     // The heated element erodes (its d5 term at T* ~ 0.1) in the CPU's step, within one.
-    let first = |s: &[Sample]| {
-        s.iter()
-            .position(|r| r.eroded_elements > 0)
-            .expect("eroded")
-    };
-    let (c, g) = (first(&cs), first(&gs));
-    println!(
-        "eroded at step {} on the CPU, {} on the GPU",
-        cs[c].step, gs[g].step
-    );
+    let (c, g) = first_eroded_rows(&cs, &gs);
     assert!(c.abs_diff(g) <= 1, "CPU row {c}, GPU row {g}");
     // The temperature it eroded at: its T* the CPU's to f32 round-off of the heating sum.
     let (cp, gp) = (
@@ -409,16 +416,7 @@ fn gpu_erodes_an_element_about_to_invert_in_the_cpus_step_and_repeats_bit_for_bi
     let (gs, gsnap) = run_to_end(&mut gpu);
     assert_eq!(cs.len(), gs.len(), "history rows");
     // A row every step: the same step erodes it on both backends, counted as inverted.
-    let first = |s: &[Sample]| {
-        s.iter()
-            .position(|r| r.eroded_elements > 0)
-            .expect("eroded")
-    };
-    let (c, g) = (first(&cs), first(&gs));
-    println!(
-        "eroded at step {} on the CPU, {} on the GPU",
-        cs[c].step, gs[g].step
-    );
+    let (c, g) = first_eroded_rows(&cs, &gs);
     assert_eq!(cs[c].step, gs[g].step);
     assert_eq!(gs.last().unwrap().eroded_elements, 1);
     assert_eq!(cpu.eroded_inverted_now().unwrap(), 1);
