@@ -43,7 +43,7 @@ pub struct Options {
     /// Runs at a time: 1 runs them one after another (the default: wall times undisturbed); more
     /// runs the GPU's runs one after another beside `jobs - 1` workers taking the CPU's, each
     /// worker taking the other backend's runs once its own are done (with one backend, `jobs`
-    /// workers). Rows, `results.csv` and the report come out in the same order either way; only
+    /// workers; each worker after the first runs the GPU's runs on a device of its own). Rows, `results.csv` and the report come out in the same order either way; only
     /// the wall times (each run's own, measured while others ran) change.
     pub jobs: usize,
 }
@@ -284,7 +284,13 @@ pub fn verify(opts: &Options, mut log: impl FnMut(&str)) -> Result<Outcome> {
             }
         }
     }
-    let rows = run_jobs(&jobs, opts.jobs.max(1), &scratch, &mut log);
+    let rows = run_jobs(
+        &jobs,
+        opts.jobs.max(1),
+        opts.adapter.as_deref(),
+        &scratch,
+        &mut log,
+    );
     let _ = std::fs::remove_dir_all(&scratch);
     for r in rows {
         out.rows.extend(r?);
@@ -312,14 +318,13 @@ struct Job<'a> {
 
 impl Job<'_> {
     fn run(&self, scratch: &Path) -> Result<Vec<Row>> {
-        run_one(
-            self.case,
-            self.method,
-            self.ctx.clone(),
-            self.index,
-            self.level,
-            scratch,
-        )
+        self.run_on(self.ctx.clone(), scratch)
+    }
+
+    /// Runs on `ctx` in place of the job's own device (another device on the same adapter gives
+    /// the same bits).
+    fn run_on(&self, ctx: Option<Arc<GpuContext>>, scratch: &Path) -> Result<Vec<Row>> {
+        run_one(self.case, self.method, ctx, self.index, self.level, scratch)
     }
 
     /// The progress line of a finished run.
@@ -350,6 +355,7 @@ impl Job<'_> {
 fn run_jobs(
     list: &[Job],
     jobs: usize,
+    adapter: Option<&str>,
     scratch: &Path,
     log: &mut impl FnMut(&str),
 ) -> Vec<Result<Vec<Row>>> {
@@ -377,11 +383,29 @@ fn run_jobs(
         // after another in one worker beside `jobs - 1` taking the CPU's, and a worker whose
         // queue is empty helps with the other (on a CPU adapter the device's runs are the long
         // ones, and they would otherwise end the suite on one core).
+        // The first worker runs the device's runs on the suite's device, any other on a device
+        // of its own, opened at its first such run (the suite's if that fails): a device's queue
+        // runs its work in turn, and on lavapipe in one thread, so that two workers on one
+        // device took turns on one core.
         let worker = |queues: [(&'_ [usize], &'_ AtomicUsize); 2],
+                      own_device: bool,
                       tx: std::sync::mpsc::Sender<_>| {
+            let mut own: Option<Arc<GpuContext>> = None;
             for (queue, next) in queues {
                 while let Some(&i) = queue.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    if tx.send((i, list[i].run(scratch))).is_err() {
+                    let job = &list[i];
+                    let ctx = match &job.ctx {
+                        Some(suite) if own_device => Some(
+                            own.get_or_insert_with(|| {
+                                GpuContext::new(adapter)
+                                    .map(Arc::new)
+                                    .unwrap_or_else(|_| suite.clone())
+                            })
+                            .clone(),
+                        ),
+                        ctx => ctx.clone(),
+                    };
+                    if tx.send((i, job.run_on(ctx, scratch))).is_err() {
                         return;
                     }
                 }
@@ -397,7 +421,7 @@ fn run_jobs(
             } else {
                 cpu_first
             };
-            scope.spawn(move || worker(queues, tx));
+            scope.spawn(move || worker(queues, w > 0, tx));
         }
         drop(tx);
         for (i, rows) in rx {

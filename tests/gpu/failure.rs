@@ -279,7 +279,7 @@ fn a_scene_without_failure_compiles_no_failure_check_or_buffers() {
     );
     shader::validate("element with failure", &failing).expect("valid WGSL");
     let Some(ctx) = context() else { return };
-    let _g = GPU_LOCK.exclusive().unwrap_or_else(|e| e.into_inner());
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     for (text, with) in [
         (block(CRITERIA[0]), true),
         (
