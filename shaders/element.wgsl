@@ -60,7 +60,7 @@ struct Failure {
     d5: f32,
     rate0: f32,
     inverted: u32,        // 1: an element about to invert erodes (run.erosion.inverted; every body)
-    _p1: u32,
+    min_dt: f32,          // run.erosion.min_time_step / time_step_scale: a smaller stable step erodes (0: never)
 }
 
 const FAIL_PLASTIC: u32 = 1u;
@@ -695,18 +695,20 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         damage = check.x;
         failed = check.y != 0.0;
     }
-    // run.erosion.inverted: an element about to invert erodes instead of stopping the run
-    // (counted apart: the fourth word of its erosion state).
+    // run.erosion.inverted: an element about to invert erodes instead of stopping the run;
+    // run.erosion.min_time_step: so does one whose stable step falls below the limit (each
+    // counted apart: the fourth word of its erosion state, 1 and 2; ricochet::gpu::element).
     let inverted = !failed && fp.inverted != 0u && !(min_corner > 0.0);
+    let small_step = !failed && min_corner > 0.0 && dt < fp.min_dt;
     {
-        if (failed || inverted) {
+        if (failed || inverted || small_step) {
             // Eroded at once (CPU: step::cpu's element stage): no force and no stable step from
             // now on, no inversion check. Its strain and stored hourglass energy leave with it,
             // less the half-step work of its unapplied forces (dot(f_n, v^{n-1/2}) dt / 2); its
             // viscous and plastic work of the step are done, its dissipative state cleared.
             let half_work = 0.5 * ctrl.dt_prev * (dot(fx, vx) + dot(fy, vy));
             let energy = w * a0t + hg_stored + half_work;
-            erosion[e] = vec4<f32>(energy, 1.0, damage, select(0.0, 1.0, inverted));
+            erosion[e] = vec4<f32>(energy, 1.0, damage, select(select(0.0, 2.0, small_step), 1.0, inverted));
             elem_force[4u * e] = vec2<f32>(0.0);
             elem_force[4u * e + 1u] = vec2<f32>(0.0);
             elem_force[4u * e + 2u] = vec2<f32>(0.0);

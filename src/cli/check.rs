@@ -430,4 +430,10 @@ fn print_outputs(scene: &Scene, plan: &Plan) {
             "erosion    an element about to invert erodes (run.erosion.inverted) instead of stopping the run"
         );
     }
+    if let Some(s) = scene.run.erode_min_time_step {
+        println!(
+            "erosion    an element whose stable step times time_step_scale falls below {s:e} s \
+             erodes (run.erosion.min_time_step) instead of shrinking the run's step"
+        );
+    }
 }

@@ -86,6 +86,13 @@ pub fn run(args: RunArgs) -> anyhow::Result<ExitCode> {
             s.eroded_elements.unwrap_or(0)
         );
     }
+    if let Some(n) = s.eroded_small_step {
+        println!(
+            "erosion: {} elements eroded, {n} of them for a stable step below \
+             run.erosion.min_time_step",
+            s.eroded_elements.unwrap_or(0)
+        );
+    }
     if let Some(t) = s.max_temperature {
         println!("thermal softening: highest element temperature {t:.1} K at the end");
     }

@@ -80,8 +80,16 @@ pub struct GpuFailure {
     pub d5: f32,
     pub rate0: f32,
     pub inverted: u32,
-    pub _pad: u32,
+    /// `run.erosion.min_time_step` over `time_step_scale` (s): an element whose stable step falls
+    /// below it erodes (0: never).
+    pub min_dt: f32,
 }
+
+/// The erosion state's fourth word of an element eroded about to invert (`run.erosion.inverted`).
+pub const ERODED_INVERTED: f32 = 1.0;
+/// The erosion state's fourth word of an element eroded for a stable step below
+/// `run.erosion.min_time_step`.
+pub const ERODED_SMALL_STEP: f32 = 2.0;
 
 /// `GpuFailure::flags`: an equivalent plastic strain limit.
 pub const FAIL_PLASTIC: u32 = 1;
@@ -152,6 +160,7 @@ pub fn bodies(model: &Model) -> Vec<GpuBody> {
 /// `run.erosion.inverted`, which every body's `inverted` carries).
 pub fn failures(model: &Model) -> Vec<GpuFailure> {
     let inverted = u32::from(model.erode_inverted);
+    let min_dt = model.erode_min_dt as f32;
     model
         .bodies
         .iter()
@@ -159,11 +168,13 @@ pub fn failures(model: &Model) -> Vec<GpuFailure> {
             let Some(c) = b.params.failure else {
                 return GpuFailure {
                     inverted,
+                    min_dt,
                     ..Default::default()
                 };
             };
             let mut g = GpuFailure {
                 inverted,
+                min_dt,
                 ..Default::default()
             };
             if let Some(x) = c.plastic_strain {

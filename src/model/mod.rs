@@ -167,6 +167,9 @@ pub struct Model {
     pub time_step_scale: f64,
     /// `run.erosion.inverted`: an element about to invert erodes instead of stopping the run.
     pub erode_inverted: bool,
+    /// `run.erosion.min_time_step` over `time_step_scale`: an element whose stable step falls
+    /// below it erodes (0: never).
+    pub erode_min_dt: f64,
 }
 
 impl Model {
@@ -200,6 +203,10 @@ impl Model {
             time_step: scene.run.time_step,
             time_step_scale: scene.run.time_step_scale,
             erode_inverted: scene.run.erode_inverted,
+            erode_min_dt: scene
+                .run
+                .erode_min_time_step
+                .map_or(0.0, |s| s / scene.run.time_step_scale),
         };
         let any_axi = scene
             .bodies
@@ -654,10 +661,10 @@ impl Model {
         self.bodies.iter().any(|b| b.params.failure.is_some())
     }
 
-    /// Whether elements may erode: a material with failure criteria, or `run.erosion.inverted`
-    /// (the plan's failure stage and the erosion state).
+    /// Whether elements may erode: a material with failure criteria, `run.erosion.inverted` or
+    /// `run.erosion.min_time_step` (the plan's failure stage and the erosion state).
     pub fn has_erosion(&self) -> bool {
-        self.has_failure() || self.erode_inverted
+        self.has_failure() || self.erode_inverted || self.erode_min_dt > 0.0
     }
 
     /// Whether a body's material has Johnson-Cook damage (kept per element between steps).

@@ -77,14 +77,19 @@ pub struct Summary {
     /// key without.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_temperature: Option<f64>,
-    /// Elements eroded by the end of the run (failed, or about to invert with
-    /// `run.erosion.inverted`); no key without failure.
+    /// Elements eroded by the end of the run (failed, about to invert with
+    /// `run.erosion.inverted`, or with a stable step below `run.erosion.min_time_step`); no key
+    /// without failure or erosion.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub eroded_elements: Option<u64>,
     /// Of `eroded_elements`, those eroded because they were about to invert (with
     /// `run.erosion.inverted`; no key without).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub eroded_inverted: Option<u64>,
+    /// Of `eroded_elements`, those eroded because their stable step fell below
+    /// `run.erosion.min_time_step` (no key without it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eroded_small_step: Option<u64>,
     /// Seconds per stage where the backend measures them.
     pub stage_seconds: Vec<(String, f64)>,
     /// History rows written.

@@ -180,7 +180,7 @@ pub fn run_with(
             scene,
             plan,
             solver,
-            (None, None),
+            (None, None, None),
             "running",
             String::new(),
             0.0,
@@ -336,11 +336,16 @@ pub fn run_with(
     } else {
         None
     };
+    let eroded_small_step = if model.erode_min_dt > 0.0 {
+        solver.eroded_small_step_now().ok()
+    } else {
+        None
+    };
     let summary = summary_now(
         scene,
         plan,
         solver,
-        (max_temperature, eroded_inverted),
+        (max_temperature, eroded_inverted, eroded_small_step),
         status,
         failure.or(interrupted).unwrap_or_default(),
         loop_seconds,
@@ -381,13 +386,14 @@ fn max_temperature(model: &Model, solver: &mut dyn Solver) -> Result<Option<f64>
 
 /// The summary of `solver`'s run so far (`max_temperature`: the highest element temperature,
 /// for a scene with thermal softening; `eroded_inverted`: the elements eroded about to invert,
-/// with `run.erosion.inverted`).
+/// with `run.erosion.inverted`; `eroded_small_step`: those eroded for a stable step below
+/// `run.erosion.min_time_step`).
 #[allow(clippy::too_many_arguments)]
 fn summary_now(
     scene: &Scene,
     plan: &Plan,
     solver: &dyn Solver,
-    (max_temperature, eroded_inverted): (Option<f64>, Option<u64>),
+    (max_temperature, eroded_inverted, eroded_small_step): (Option<f64>, Option<u64>, Option<u64>),
     status: &str,
     message: String,
     loop_seconds: f64,
@@ -448,6 +454,7 @@ fn summary_now(
             .has(crate::plan::Stage::Failure)
             .then_some(counters.eroded_elements),
         eroded_inverted,
+        eroded_small_step,
         stage_seconds: solver.stage_seconds(),
         history_rows,
         snapshots,

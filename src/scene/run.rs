@@ -96,6 +96,10 @@ pub struct RunSettings {
     /// `erosion = { inverted = true }`: an element about to invert erodes (as a failed element,
     /// counted apart) instead of stopping the run (false: the run stops naming it).
     pub erode_inverted: bool,
+    /// `erosion = { min_time_step = s }`: an element whose stable step, times
+    /// `time_step_scale`, falls below `s` seconds erodes (as a failed element, counted apart)
+    /// instead of shrinking the run's step (none: no such limit).
+    pub erode_min_time_step: Option<f64>,
 }
 
 impl Validator<'_> {
@@ -221,22 +225,29 @@ impl Validator<'_> {
                 self.positive("run.gravity_ramp", t)?
             }
         };
-        let erode_inverted = match &r.erosion {
-            None => false,
+        let (erode_inverted, erode_min_time_step) = match &r.erosion {
+            None => (false, None),
             Some(v) => {
-                let expected = "expected a table { inverted = true or false }";
+                let expected =
+                    "expected a table { inverted = true or false, min_time_step = seconds }";
                 let Some(t) = v.as_table() else {
                     return Err(self.invalid("run.erosion", v.to_string(), expected));
                 };
-                if let Some(k) = t.keys().find(|k| k.as_str() != "inverted") {
+                if let Some(k) = t
+                    .keys()
+                    .find(|k| !matches!(k.as_str(), "inverted" | "min_time_step"))
+                {
                     return Err(self.invalid(
                         format!("run.erosion.{k}"),
                         t[k].to_string(),
-                        "unknown key (expected inverted)",
+                        "unknown key (expected inverted or min_time_step)",
                     ));
                 }
-                match t.get("inverted") {
-                    None => return Err(self.invalid("run.erosion", "{}", expected)),
+                if t.is_empty() {
+                    return Err(self.invalid("run.erosion", "{}", expected));
+                }
+                let inverted = match t.get("inverted") {
+                    None => false,
                     Some(toml::Value::Boolean(b)) => *b,
                     Some(x) => {
                         return Err(self.invalid(
@@ -245,7 +256,21 @@ impl Validator<'_> {
                             "expected true or false",
                         ))
                     }
-                }
+                };
+                let min_time_step = match t.get("min_time_step") {
+                    None => None,
+                    Some(x) => {
+                        let Some(s) = x.as_float().or(x.as_integer().map(|i| i as f64)) else {
+                            return Err(self.invalid(
+                                "run.erosion.min_time_step",
+                                x.to_string(),
+                                "expected a time step in seconds",
+                            ));
+                        };
+                        Some(self.positive("run.erosion.min_time_step", s)?)
+                    }
+                };
+                (inverted, min_time_step)
             }
         };
         Ok(RunSettings {
@@ -263,6 +288,7 @@ impl Validator<'_> {
             gravity,
             gravity_ramp,
             erode_inverted,
+            erode_min_time_step,
         })
     }
 }

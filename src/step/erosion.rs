@@ -1,6 +1,7 @@
 //! The CPU reference's erosion state ([`Erosion`]): which elements failed and left the mesh, the
 //! Johnson-Cook damage, and the energy the eroded elements took with them (with, apart, how many
-//! eroded because they were about to invert: `run.erosion.inverted`). The failure criteria
+//! eroded because they were about to invert, `run.erosion.inverted`, and how many because their
+//! stable step fell below `run.erosion.min_time_step`). The failure criteria
 //! themselves are [`crate::element::failure`]; the solver's element stage
 //! ([`super::cpu::CpuSolver`]) asks `Erosion::fails` and records with `Erosion::erode`.
 
@@ -30,6 +31,10 @@ pub struct Erosion {
     /// (`run.erosion.inverted`).
     #[serde(default)]
     pub(crate) inverted: u64,
+    /// Of `count`, the elements eroded because their stable step fell below
+    /// `run.erosion.min_time_step`.
+    #[serde(default)]
+    pub(crate) small_step: u64,
 }
 
 impl Erosion {
@@ -46,6 +51,7 @@ impl Erosion {
             count: 0,
             energy: 0.0,
             inverted: 0,
+            small_step: 0,
         }
     }
 
@@ -104,6 +110,6 @@ impl Erosion {
         self.eroded.len() == fresh.eroded.len()
             && self.damage.len() == fresh.damage.len()
             && self.count as usize <= self.eroded.len()
-            && self.inverted <= self.count
+            && self.inverted + self.small_step <= self.count
     }
 }

@@ -292,6 +292,15 @@ pub trait Solver {
         Ok(0)
     }
 
+    /// Elements eroded so far because their stable step fell below
+    /// `run.erosion.min_time_step` (0 without): a part of [`Counters::eroded_elements`].
+    ///
+    /// # Errors
+    /// A failed device readback.
+    fn eroded_small_step_now(&mut self) -> Result<u64> {
+        Ok(0)
+    }
+
     /// Advances at least one step, until one or more events happened (or, without one, for about
     /// [`ADVANCE_SECONDS`]), and appends them.
     ///

@@ -1858,8 +1858,23 @@ fn bad_erosion_options_name_the_key_and_value() {
     );
     expect_rejected(
         "erosion_unknown_key",
+        &with("erosion = { inverted = true, dt_min = 1.0e-9 }"),
+        &["run.erosion.dt_min", "unknown key"],
+    );
+    expect_accepted(
+        "erosion_min_time_step_ok",
         &with("erosion = { inverted = true, min_time_step = 1.0e-9 }"),
-        &["run.erosion.min_time_step", "unknown key"],
+        true,
+    );
+    expect_rejected(
+        "erosion_min_time_step_negative",
+        &with("erosion = { min_time_step = -1.0e-9 }"),
+        &["run.erosion.min_time_step", "-1e-9"],
+    );
+    expect_rejected(
+        "erosion_min_time_step_not_a_number",
+        &with("erosion = { min_time_step = \"small\" }"),
+        &["run.erosion.min_time_step", "small", "seconds"],
     );
 }
 

@@ -507,6 +507,68 @@ fn a_run_with_thermal_softening_restarts_to_the_same_outputs() {
 }
 
 #[test]
+fn an_element_whose_stable_step_falls_below_min_time_step_erodes_at_the_closed_forms_time() {
+    let text = collapsing_element();
+    let (scene, model, plan) = build(&text);
+    assert!(plan.has(Stage::Failure) && !model.has_failure() && model.has_erosion());
+    let scale = scene.run.time_step_scale;
+    let limit = scene.run.erode_min_time_step.expect("min_time_step");
+    let mut solver = CpuSolver::new(model.clone(), plan, ricochet::run::schedule(&scene));
+    let dt0 = solver.stable_step().0;
+    let t_star = collapse_time(dt0, scale, limit);
+    let t_cross = SIDE / (2.0 * COLLAPSE_SPEED);
+    assert!(t_star > 0.0 && t_star < t_cross, "{t_star:e} {t_cross:e}");
+    // It erodes in the first step whose u_n (at t_n) puts its stable step below the limit: t_n
+    // past t*, the step before at or before it.
+    let (before, at) = step_until_eroded(&mut solver).expect("the element erodes");
+    println!(
+        "stable step at rest {dt0:e} s, limit {limit:e} s: eroded in the step from t = {:e} s \
+         (closed form t* = {t_star:e} s, the step before from {:e} s)",
+        at.0, before.0
+    );
+    assert!(before.0 <= t_star && at.0 > t_star, "{before:?} {at:?}");
+    assert_eq!(solver.eroded_count(), 1);
+    assert_eq!(solver.eroded_small_step_now().unwrap(), 1);
+    assert_eq!(solver.eroded_inverted_now().unwrap(), 0);
+    // The run's step never went below the limit (after the erosion it keeps its last step).
+    solver.run_steps(u64::MAX);
+    let (dt_min, _) = solver.dt_range();
+    assert!(
+        dt_min >= limit,
+        "smallest step {dt_min:e} s under the limit {limit:e} s"
+    );
+    // Through the binary: completed, counted apart, the energy balanced with the eroded energy.
+    let dir = tmp_dir("erosion-min-step");
+    let file = dir.join("collapse.toml");
+    std::fs::write(&file, &text).unwrap();
+    let out = dir.join("out");
+    let o = run_cpu(&file, &out, &[]);
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("1 elements eroded, 1 of them for a stable step below"),
+        "{stdout}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "completed");
+    assert_eq!(summary["eroded_elements"].as_u64(), Some(1));
+    assert_eq!(summary["eroded_small_step"].as_u64(), Some(1));
+    assert!(summary.get("eroded_inverted").is_none());
+    let max_error = summary["max_energy_error"].as_f64().unwrap();
+    let (header, rows) = read_csv(&out.join("history.csv"));
+    let last = rows.last().unwrap();
+    let last_error = last[column(&header, "energy_error")];
+    println!("energy error {max_error:e} (start-up), {last_error:e} at the end");
+    assert!(last[column(&header, "eroded_energy")] > 0.0);
+    assert!(max_error < 2e-3, "{max_error}");
+    assert!(last_error < 1e-9, "{last_error}");
+    let c = run_bin(&["check", file.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&c.stdout).contains("run.erosion.min_time_step"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn an_element_about_to_invert_erodes_with_erosion_inverted_and_the_run_goes_on() {
     // Its corner crosses the diagonal at t = SIDE / (2 x 100 m/s) = 50 us.
     let (speed, end) = (100.0, 8.0e-5);

@@ -194,3 +194,23 @@ velocity = {{ x = {v:e}, y = {v:e} }}
         v = -speed,
     )
 }
+
+/// The stress case `assets/stress/collapsing_element.toml`: the element of [`crushed_corner`] at
+/// [`COLLAPSE_SPEED`], bulk viscosity off, with `run.erosion.min_time_step`.
+pub fn collapsing_element() -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/stress/collapsing_element.toml");
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The corner's speed in [`collapsing_element`] (m/s).
+pub const COLLAPSE_SPEED: f64 = 100.0;
+
+/// When [`collapsing_element`]'s element erodes, in closed form: its characteristic length is
+/// SIDE - v t (its area SIDE (SIDE - v t) over its longest side SIDE) and its wave speed
+/// c0 sqrt(A / A0) = c0 sqrt(1 - v t / SIDE) (at the current density), so its stable step is
+/// `dt0` sqrt(1 - v t / SIDE), `dt0` = SIDE / c0 its stable step at rest, and it falls below
+/// `min_time_step / scale` after t* = (SIDE / v) (1 - (min_time_step / (scale dt0))^2).
+pub fn collapse_time(dt0: f64, scale: f64, min_time_step: f64) -> f64 {
+    SIDE / COLLAPSE_SPEED * (1.0 - (min_time_step / (scale * dt0)).powi(2))
+}

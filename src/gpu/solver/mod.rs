@@ -27,6 +27,7 @@ use crate::step::{Counters, Event, Schedule, Solver};
 
 use super::contact::{ContactCounters, ContactOptions};
 use super::context::{GpuContext, KernelKey};
+use super::element::{ERODED_INVERTED, ERODED_SMALL_STEP};
 use super::kernels::{Features, Kernels};
 use super::layout::*;
 use super::state::{GpuState, MAX_BATCH};
@@ -41,7 +42,7 @@ pub const MIN_BATCH: u32 = 32;
 /// Why the GPU refuses a scene with both failure and contact: its contact surfaces would stay as
 /// meshed while elements erode (the CPU reference follows erosion: `contact::erosion`).
 pub const ERODING_CONTACT: &str = "eroding contact (a material's `failure`, or \
-     `run.erosion.inverted`, in a scene with \
+     `run.erosion.inverted` or `min_time_step`, in a scene with \
      `[[contact]]` or `[[rigid_wall]]`) runs on the CPU reference only so far: the GPU erodes \
      elements but does not yet move its contact surfaces onto the edges they expose; use \
      --backend cpu";
@@ -563,7 +564,11 @@ impl Solver for GpuSolver {
     }
 
     fn eroded_inverted_now(&mut self) -> Result<u64> {
-        self.eroded_inverted()
+        self.eroded_apart(ERODED_INVERTED)
+    }
+
+    fn eroded_small_step_now(&mut self) -> Result<u64> {
+        self.eroded_apart(ERODED_SMALL_STEP)
     }
 
     fn counters(&self) -> Counters {

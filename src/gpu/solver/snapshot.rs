@@ -7,6 +7,8 @@ use crate::error::{Error, Result};
 use crate::step::Snapshot;
 
 use super::{GpuSolver, NodalField};
+#[cfg(doc)]
+use crate::gpu::element::{ERODED_INVERTED, ERODED_SMALL_STEP};
 
 impl GpuSolver {
     pub(super) fn read_snapshot(&mut self, step: u64, time: f64) -> Result<Snapshot> {
@@ -72,16 +74,17 @@ impl GpuSolver {
         Ok((eroded, damage))
     }
 
-    /// Elements eroded because they were about to invert (`run.erosion.inverted`): the erosion
-    /// state's fourth word (one readback; 0 without erosion).
-    pub(super) fn eroded_inverted(&mut self) -> Result<u64> {
+    /// Elements eroded for `reason`, the erosion state's fourth word: [`ERODED_INVERTED`]
+    /// (`run.erosion.inverted`) or [`ERODED_SMALL_STEP`] (`run.erosion.min_time_step`); one
+    /// readback, 0 without erosion.
+    pub(super) fn eroded_apart(&mut self, reason: f32) -> Result<u64> {
         let Some(buf) = self.state.erosion.clone() else {
             return Ok(0);
         };
         let ne = self.state.params.n_elems as u64;
         let bytes = self.read_copies("erosion_readback", &[(&buf, 0, 16 * ne)])?;
         let f: &[f32] = bytemuck::cast_slice(&bytes);
-        Ok((0..ne as usize).filter(|&e| f[4 * e + 3] != 0.0).count() as u64)
+        Ok((0..ne as usize).filter(|&e| f[4 * e + 3] == reason).count() as u64)
     }
 
     /// The plastic state of every element (empty without a plastic body): C_p^-1 = I + the

@@ -80,8 +80,11 @@ impl CpuSolver {
                     .fails(&self.model, e, &out, alpha_old, self.s.dt_prev)
             };
             let inverted = out.min_corner.is_nan() || out.min_corner <= 0.0;
-            if failed || (inverted && self.model.erode_inverted) {
-                // Eroded at once (failed, or about to invert with `run.erosion.inverted`): no
+            // `run.erosion.min_time_step`: a stable step below the limit erodes the element.
+            let small_step = !failed && !inverted && out.dt < self.model.erode_min_dt;
+            if failed || (inverted && self.model.erode_inverted) || small_step {
+                // Eroded at once (failed, about to invert with `run.erosion.inverted`, or with a
+                // stable step below `run.erosion.min_time_step`): no
                 // force, no stable step from now on. Its strain and stored hourglass energy
                 // leave with it, less the work its forces f_n would have done over the half step
                 // before t_n: the energy of the interval pairs f_{n-1} and f_n (trapezoidal),
@@ -105,7 +108,9 @@ impl CpuSolver {
                 self.s
                     .erosion
                     .erode(e, out.strain_energy + out.hourglass_stored + half_work);
-                if !failed {
+                if small_step {
+                    self.s.erosion.small_step += 1;
+                } else if !failed {
                     self.s.erosion.inverted += 1;
                 }
                 continue;

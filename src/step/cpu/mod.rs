@@ -724,4 +724,8 @@ impl Solver for CpuSolver {
     fn eroded_inverted_now(&mut self) -> Result<u64> {
         Ok(self.s.erosion.inverted)
     }
+
+    fn eroded_small_step_now(&mut self) -> Result<u64> {
+        Ok(self.s.erosion.small_step)
+    }
 }
