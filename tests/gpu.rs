@@ -24,9 +24,8 @@ use ricochet::scene::Scene;
 use ricochet::step::cpu::CpuSolver;
 use ricochet::step::Solver;
 
-/// GPU tests at a time: two (lavapipe shares the machine's two cores), or `RICOCHET_GPU_TESTS`.
-/// Each test has a device of its own ([`context`]), so that what one compiles or allocates no
-/// other sees.
+/// GPU tests at a time: two (lavapipe shares the machine's two cores), or `RICOCHET_GPU_TESTS`,
+/// each on a device no other running test holds ([`context`]).
 static GPU_LOCK: GpuLock = GpuLock::new();
 
 /// GPU tests at a time when `RICOCHET_GPU_TESTS` does not say: two. With two the whole suite
@@ -34,6 +33,15 @@ static GPU_LOCK: GpuLock = GpuLock::new();
 /// 4842683); a test at a time leaves a core idle in each test's serial parts (setup, the CPU
 /// reference's run, readbacks).
 const DEFAULT_GPU_TESTS: usize = 2;
+
+/// GPU tests at a time: `RICOCHET_GPU_TESTS`, or [`DEFAULT_GPU_TESTS`].
+fn gpu_tests() -> usize {
+    std::env::var("RICOCHET_GPU_TESTS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .unwrap_or(DEFAULT_GPU_TESTS)
+        .max(1)
+}
 
 /// A counting lock over the GPU tests ([`GPU_LOCK`]): `lock()` (with `Mutex::lock`'s shape) takes
 /// one of `RICOCHET_GPU_TESTS` turns.
@@ -59,11 +67,7 @@ impl GpuLock {
 
     /// One turn, once fewer than `RICOCHET_GPU_TESTS` (default [`DEFAULT_GPU_TESTS`]) are held.
     fn lock(&self) -> Result<GpuPermit<'_>, std::sync::PoisonError<GpuPermit<'_>>> {
-        let most = std::env::var("RICOCHET_GPU_TESTS")
-            .ok()
-            .and_then(|v| v.parse::<usize>().ok())
-            .unwrap_or(DEFAULT_GPU_TESTS);
-        Ok(self.shared(most))
+        Ok(self.shared(gpu_tests()))
     }
 
     /// One of `most` (at least one) turns, as [`GpuLock::lock`].
@@ -116,33 +120,35 @@ fn gpu_lock_gives_at_most_n_turns_at_once() {
     assert_eq!(*lock.busy.lock().unwrap(), 0);
 }
 
-/// The test's own device on the default adapter (libtest runs each test in a thread of its own;
-/// a second call in the same thread gets the same device). lavapipe runs each device's queue in
-/// one thread, and with `LP_NUM_THREADS=0` (as `.ci/run` sets) every dispatch in it: two tests
-/// sharing one process-wide device took turns on one core for their GPU work.
+/// A device of the default adapter for a GPU test, from a pool of as many as GPU tests run at
+/// once ([`gpu_tests`]): one that no running test holds (a test holds its clone until it ends),
+/// opened while the pool is not full, or else the one the fewest hold. lavapipe runs each
+/// device's queue in one thread, and with `LP_NUM_THREADS=0` (as `.ci/run` sets) every dispatch
+/// in it: two tests sharing one process-wide device took turns on one core for their GPU work.
+/// A device reused by the next test keeps the kernels its scenes compiled (its `KernelCache`).
 fn context() -> Option<Arc<GpuContext>> {
-    thread_local! {
-        static CONTEXT: std::cell::OnceCell<Result<Arc<GpuContext>, String>> =
-            const { std::cell::OnceCell::new() };
+    static POOL: Mutex<Vec<Arc<GpuContext>>> = Mutex::new(Vec::new());
+    let mut pool = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(free) = pool.iter().find(|c| Arc::strong_count(c) == 1) {
+        return Some(free.clone());
     }
-    let opened = CONTEXT.with(|c| {
-        c.get_or_init(|| {
-            GpuContext::new(None)
-                .map(Arc::new)
-                .map_err(|e| e.to_string())
-        })
-        .clone()
-    });
-    match opened {
-        Ok(ctx) => Some(ctx),
-        Err(e) => {
-            if std::env::var_os("CI").is_some() {
-                panic!("CI is set but no GPU adapter is available: {e}");
+    if pool.len() < gpu_tests() || pool.is_empty() {
+        match GpuContext::new(None) {
+            Ok(ctx) => {
+                pool.push(Arc::new(ctx));
+                return pool.last().cloned();
             }
-            eprintln!("skipped: no GPU adapter ({e})");
-            None
+            Err(e) if pool.is_empty() => {
+                if std::env::var_os("CI").is_some() {
+                    panic!("CI is set but no GPU adapter is available: {e}");
+                }
+                eprintln!("skipped: no GPU adapter ({e})");
+                return None;
+            }
+            Err(_) => {}
         }
     }
+    pool.iter().min_by_key(|c| Arc::strong_count(c)).cloned()
 }
 
 /// A folder under the temporary folder for one run's outputs, `ricochet-{what}-{pid}-{n}` with `n`
