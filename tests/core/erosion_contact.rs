@@ -383,55 +383,71 @@ fn a_projectile_perforates_a_plate_with_no_node_inside_a_remaining_element() {
             true,
         ),
     ] {
-        let text = perforation(400.0, contact);
-        let (solver, samples) = run_samples(&text);
-        let model = solver.model();
-        let eroded = solver.eroded();
-        let last = samples.last().unwrap();
-        let u = solver.displacement();
-        // Perforated: elements eroded, and the projectile's nose went past the plate's far side
-        // still moving.
-        let nose = model.bodies[1]
-            .nodes
-            .clone()
-            .map(|n| model.position[n][1] + u[n][1])
-            .fold(f64::INFINITY, f64::min);
-        let vy = model.bodies[1]
-            .nodes
-            .clone()
-            .map(|n| solver.velocity()[n][1])
-            .sum::<f64>()
-            / model.bodies[1].nodes.len() as f64;
-        let [deepest, own_surface, own_free] = deepest_in_remaining(model, u, eroded);
-        let mut audit = ricochet::output::history::EnergyAudit::default();
-        for s in &samples {
-            audit.error(s);
-        }
-        println!(
-            "{contact}: {} eroded, eroded energy {:.3e} J/m, nose at {nose:.4e} m, projectile \
-             {vy:.1} m/s, deepest node in a remaining element of the other body {deepest:.2e} m, \
-             of its own {own_surface:.2e} m (free nodes {own_free:.2e} m), energy error {:.2e}, \
-             contact energy {:.3e} J/m",
-            last.eroded_elements, last.eroded_energy, audit.max_error, last.contact
-        );
-        assert!(last.eroded_elements > 0 && last.eroded_energy > 0.0);
-        assert!(nose < 0.0 && vy < 0.0, "{nose} {vy}");
-        // No node inside a remaining element of the other body, nor with self-contact a node of
-        // the plate's surface inside its own (0.1 % of an element). A free node can end inside
-        // its own body: squeezed between the projectile and the hole's wall (no room for it
-        // between two constraints), it goes through the wall (2 of them by 2.1e-5 m, 4 % of an
-        // element, with self-contact here, 2026-11-27).
-        assert!(deepest < 5e-7, "{deepest:e}");
-        if own {
-            assert!(own_surface < 5e-7, "{own_surface:e}");
-        }
-        // The energy audit with the eroded energy counted, as a contact run's.
-        assert!(audit.max_error < 1e-3, "{}", audit.max_error);
-        // The contact surfaces at the end are those of the remaining elements.
-        let set = solver.contact().unwrap();
-        let fresh = sides(&ContactSet::new(model).unwrap());
-        assert_eq!(sides(set), expected(model, &fresh, eroded));
+        assert_perforates(contact, &perforation(400.0, contact), own);
     }
+}
+
+#[test]
+fn the_shipped_plate_perforation_perforates_with_no_node_inside_a_remaining_element() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/plate_perforation.toml");
+    let text = std::fs::read_to_string(&path).expect("assets/plate_perforation.toml");
+    assert_perforates("assets/plate_perforation.toml", &text, false);
+}
+
+/// Runs `text`, a projectile (body 1) onto a plate (body 0), and checks that it perforates: the
+/// plate's elements eroded and the projectile's nose past the plate's far side (y = 0), still
+/// moving; no node inside a remaining element of the other body (with `own`, self-contact, nor
+/// a node of the plate's surface inside its own); the energy audit with the eroded energy
+/// counted; the contact surfaces at the end those of the remaining elements.
+fn assert_perforates(label: &str, text: &str, own: bool) {
+    let (solver, samples) = run_samples(text);
+    let model = solver.model();
+    let eroded = solver.eroded();
+    let last = samples.last().unwrap();
+    let u = solver.displacement();
+    // Perforated: elements eroded, and the projectile's nose went past the plate's far side
+    // still moving.
+    let nose = model.bodies[1]
+        .nodes
+        .clone()
+        .map(|n| model.position[n][1] + u[n][1])
+        .fold(f64::INFINITY, f64::min);
+    let vy = model.bodies[1]
+        .nodes
+        .clone()
+        .map(|n| solver.velocity()[n][1])
+        .sum::<f64>()
+        / model.bodies[1].nodes.len() as f64;
+    let [deepest, own_surface, own_free] = deepest_in_remaining(model, u, eroded);
+    let mut audit = ricochet::output::history::EnergyAudit::default();
+    for s in &samples {
+        audit.error(s);
+    }
+    println!(
+        "{label}: {} eroded, eroded energy {:.3e} J/m, nose at {nose:.4e} m, projectile \
+         {vy:.1} m/s, deepest node in a remaining element of the other body {deepest:.2e} m, \
+         of its own {own_surface:.2e} m (free nodes {own_free:.2e} m), energy error {:.2e}, \
+         contact energy {:.3e} J/m",
+        last.eroded_elements, last.eroded_energy, audit.max_error, last.contact
+    );
+    assert!(last.eroded_elements > 0 && last.eroded_energy > 0.0);
+    assert!(nose < 0.0 && vy < 0.0, "{nose} {vy}");
+    // No node inside a remaining element of the other body, nor with self-contact a node of
+    // the plate's surface inside its own (0.1 % of an element). A free node can end inside
+    // its own body: squeezed between the projectile and the hole's wall (no room for it
+    // between two constraints), it goes through the wall (2 of them by 2.1e-5 m, 4 % of an
+    // element, with self-contact here, 2026-11-27).
+    assert!(deepest < 5e-7, "{deepest:e}");
+    if own {
+        assert!(own_surface < 5e-7, "{own_surface:e}");
+    }
+    // The energy audit with the eroded energy counted, as a contact run's.
+    assert!(audit.max_error < 1e-3, "{}", audit.max_error);
+    // The contact surfaces at the end are those of the remaining elements.
+    let set = solver.contact().unwrap();
+    let fresh = sides(&ContactSet::new(model).unwrap());
+    assert_eq!(sides(set), expected(model, &fresh, eroded));
 }
 
 #[test]
