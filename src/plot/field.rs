@@ -151,13 +151,17 @@ const MARGIN: u32 = 15;
 const X_LABELS: u32 = 50;
 const Y_LABELS: u32 = 95;
 const BAR: u32 = 170;
+/// The colour of a cell without a value: a body whose material does not write the field
+/// (`plastic_strain` of an elastic body) is drawn in light grey.
+const NO_VALUE: [u8; 3] = [200, 200, 200];
 
 /// One body's cells and their values in one snapshot.
 #[derive(Debug, Clone)]
 pub struct Layer<'a> {
     /// The body's deformed mesh.
     pub piece: &'a Piece,
-    /// One value per cell.
+    /// One value per cell (empty for a body whose material does not write the field: drawn in
+    /// light grey).
     pub values: &'a [f64],
 }
 
@@ -330,7 +334,10 @@ pub fn draw<DB: DrawingBackend>(
             if gone[c] {
                 continue;
             }
-            let [r, g, b] = level_colour(level(layer.values[c], lo, hi));
+            let [r, g, b] = match layer.values.get(c) {
+                Some(&v) => level_colour(level(v, lo, hi)),
+                None => NO_VALUE,
+            };
             area.draw(&Polygon::new(corners(piece, c), RGBColor(r, g, b).filled()))
                 .map_err(text)?;
         }

@@ -272,6 +272,36 @@ fn uniform_stress_of_the_contact_patch_test_is_drawn_in_its_colour() {
 }
 
 #[test]
+fn plastic_strain_draws_a_body_whose_material_does_not_write_it_in_grey() {
+    // The plate perforation's first microsecond: a plastic plate and an elastic projectile,
+    // whose cells have no plastic_strain (the plot once indexed past their empty values).
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("assets/plate_perforation.toml"))
+        .expect("asset")
+        .replace("end_time = 4.0e-5", "end_time = 1.0e-6")
+        .replace("field_interval = 5.0e-6", "field_interval = 5.0e-7");
+    let dir = tmp_dir("plot-mixed");
+    let scene = dir.join("mixed.toml");
+    std::fs::write(&scene, text).expect("scene");
+    let out = dir.join("out");
+    run_scene(&scene.to_string_lossy(), &out, &[]);
+    let o = run_bin(&["plot", &out.to_string_lossy(), "--field", "plastic_strain"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    let last = out.join("plots/field_plastic_strain_00002.png");
+    assert_size(&last, field::SIZE);
+    // The projectile (10 x 20 mm of the picture's 60 x 24 mm) in the no-value grey.
+    let (_, _, rgb) = png_rgb(&last);
+    let grey = rgb
+        .chunks_exact(3)
+        .filter(|p| *p == [200, 200, 200])
+        .count();
+    println!("{grey} grey pixels");
+    assert!(grey > 10_000, "{grey} grey pixels");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn plot_refuses_folders_that_are_not_a_run_and_fields_it_did_not_write() {
     let empty = tmp_dir("plot-empty");
     let o = run_bin(&["plot", &empty.to_string_lossy()]);
