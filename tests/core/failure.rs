@@ -506,6 +506,41 @@ fn a_run_with_thermal_softening_restarts_to_the_same_outputs() {
     let _ = std::fs::remove_dir_all(&base);
 }
 
+/// Runs `file` (a scene in which one element erodes, by `run.erosion`) through the binary into
+/// `out`: it completes, `run` says "1 elements eroded, 1 of them {why}", and `summary.json`
+/// counts the one element under `key` (`eroded_inverted` or `eroded_small_step`) and not under
+/// the other. The summary's largest energy error, the last row's, and its eroded energy.
+fn run_eroding_one(
+    file: &std::path::Path,
+    out: &std::path::Path,
+    why: &str,
+    key: &str,
+) -> (f64, f64, f64) {
+    let o = run_cpu(file, out, &[]);
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains(&format!("1 elements eroded, 1 of them {why}")),
+        "{stdout}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "completed");
+    assert_eq!(summary["eroded_elements"].as_u64(), Some(1));
+    for k in ["eroded_inverted", "eroded_small_step"] {
+        let want = (k == key).then_some(1);
+        assert_eq!(summary.get(k).and_then(|v| v.as_u64()), want, "{k}");
+    }
+    let max_error = summary["max_energy_error"].as_f64().unwrap();
+    let (header, rows) = read_csv(&out.join("history.csv"));
+    let last = rows.last().unwrap();
+    (
+        max_error,
+        last[column(&header, "energy_error")],
+        last[column(&header, "eroded_energy")],
+    )
+}
+
 #[test]
 fn an_element_whose_stable_step_falls_below_min_time_step_erodes_at_the_closed_forms_time() {
     let text = collapsing_element();
@@ -541,26 +576,14 @@ fn an_element_whose_stable_step_falls_below_min_time_step_erodes_at_the_closed_f
     let dir = tmp_dir("erosion-min-step");
     let file = dir.join("collapse.toml");
     std::fs::write(&file, &text).unwrap();
-    let out = dir.join("out");
-    let o = run_cpu(&file, &out, &[]);
-    assert_eq!(o.status.code(), Some(0), "{o:?}");
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        stdout.contains("1 elements eroded, 1 of them for a stable step below"),
-        "{stdout}"
+    let (max_error, last_error, eroded_energy) = run_eroding_one(
+        &file,
+        &dir.join("out"),
+        "for a stable step below",
+        "eroded_small_step",
     );
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["status"], "completed");
-    assert_eq!(summary["eroded_elements"].as_u64(), Some(1));
-    assert_eq!(summary["eroded_small_step"].as_u64(), Some(1));
-    assert!(summary.get("eroded_inverted").is_none());
-    let max_error = summary["max_energy_error"].as_f64().unwrap();
-    let (header, rows) = read_csv(&out.join("history.csv"));
-    let last = rows.last().unwrap();
-    let last_error = last[column(&header, "energy_error")];
     println!("energy error {max_error:e} (start-up), {last_error:e} at the end");
-    assert!(last[column(&header, "eroded_energy")] > 0.0);
+    assert!(eroded_energy > 0.0);
     assert!(max_error < 2e-3, "{max_error}");
     assert!(last_error < 1e-9, "{last_error}");
     let c = run_bin(&["check", file.to_str().unwrap()]);
@@ -615,24 +638,12 @@ fn an_element_about_to_invert_erodes_with_erosion_inverted_and_the_run_goes_on()
     assert_eq!(solver.eroded_inverted_now().unwrap(), 1);
     let file = dir.join("erode.toml");
     std::fs::write(&file, &text).unwrap();
-    let out = dir.join("erode");
-    let o = run_cpu(&file, &out, &[]);
-    assert_eq!(o.status.code(), Some(0), "{o:?}");
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        stdout.contains("1 elements eroded, 1 of them about to invert"),
-        "{stdout}"
+    let (max_error, last_error, eroded_energy) = run_eroding_one(
+        &file,
+        &dir.join("erode"),
+        "about to invert",
+        "eroded_inverted",
     );
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["status"], "completed");
-    assert_eq!(summary["eroded_elements"].as_u64(), Some(1));
-    assert_eq!(summary["eroded_inverted"].as_u64(), Some(1));
-    let max_error = summary["max_energy_error"].as_f64().unwrap();
-    let (header, rows) = read_csv(&out.join("history.csv"));
-    let last = rows.last().unwrap();
-    let eroded_energy = last[column(&header, "eroded_energy")];
-    let last_error = last[column(&header, "energy_error")];
     println!(
         "energy error {max_error:e} (start-up), {last_error:e} at the end, eroded energy \
          {eroded_energy:e} J"
