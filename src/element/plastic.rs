@@ -376,6 +376,26 @@ mod tests {
     }
 
     fn johnson_cook(c: f64) -> ElementParams {
+        johnson_cook_with(c, None)
+    }
+
+    /// Johnson-Cook copper without rate term, with thermal softening m = 1 (T_r 300 K, T_m
+    /// 1356 K) and adiabatic heating.
+    fn johnson_cook_thermal() -> ElementParams {
+        johnson_cook_with(
+            0.0,
+            Some(crate::scene::ThermalSoftening {
+                m: 1.0,
+                melt_temperature: 1356.0,
+                room_temperature: 300.0,
+                specific_heat: 383.0,
+                taylor_quinney: 0.9,
+            }),
+        )
+    }
+
+    /// Johnson-Cook copper with rate coefficient `c` and `thermal`.
+    fn johnson_cook_with(c: f64, thermal: Option<crate::scene::ThermalSoftening>) -> ElementParams {
         copper_with(Plasticity {
             yield_stress: 9.0e7,
             hardening_modulus: 0.0,
@@ -385,30 +405,7 @@ mod tests {
                 n: 0.31,
                 c,
                 reference_strain_rate: 1.0,
-                thermal: None,
-            }),
-        })
-    }
-
-    /// Johnson-Cook copper without rate term, with thermal softening m = 1 (T_r 300 K, T_m
-    /// 1356 K) and adiabatic heating.
-    fn johnson_cook_thermal() -> ElementParams {
-        copper_with(Plasticity {
-            yield_stress: 9.0e7,
-            hardening_modulus: 0.0,
-            johnson_cook: Some(crate::scene::JohnsonCook {
-                a: 9.0e7,
-                b: 2.92e8,
-                n: 0.31,
-                c: 0.0,
-                reference_strain_rate: 1.0,
-                thermal: Some(crate::scene::ThermalSoftening {
-                    m: 1.0,
-                    melt_temperature: 1356.0,
-                    room_temperature: 300.0,
-                    specific_heat: 383.0,
-                    taylor_quinney: 0.9,
-                }),
+                thermal,
             }),
         })
     }

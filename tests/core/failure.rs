@@ -42,6 +42,22 @@ fn step_until_eroded(
     None
 }
 
+/// The numbers the Python `script` prints when run on the output folder `out` (meshio reads its
+/// VTU files), and what it printed, with its standard error.
+fn python_numbers(script: &str, out: &std::path::Path) -> (Vec<f64>, String) {
+    let py = std::process::Command::new("python3")
+        .args(["-c", script, out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let line = String::from_utf8_lossy(&py.stdout).into_owned();
+    let v = line
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let printed = format!("{line} {}", String::from_utf8_lossy(&py.stderr));
+    (v, printed)
+}
+
 /// The stretch of the single element from its displacements (top node minus bottom node).
 fn stretch(u: &[[f64; 2]], model: &ricochet::model::Model) -> f64 {
     let top = model
@@ -279,16 +295,8 @@ vm = m.cell_data["von_mises"][0]
 d = m.cell_data["damage"][0]
 print(int(e.sum()), len(e), float(abs(vm[e == 1]).max()) if e.sum() else 0.0, float(d.max()))
 "#;
-    let py = std::process::Command::new("python3")
-        .args(["-c", script, out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let line = String::from_utf8_lossy(&py.stdout);
-    let v: Vec<f64> = line
-        .split_whitespace()
-        .map(|x| x.parse().unwrap())
-        .collect();
-    assert_eq!(v.len(), 4, "{line} {}", String::from_utf8_lossy(&py.stderr));
+    let (v, line) = python_numbers(script, &out);
+    assert_eq!(v.len(), 4, "{line}");
     assert_eq!(v[0], last[n], "{line}");
     assert_eq!(v[1], 32.0);
     assert_eq!(v[2], 0.0);
@@ -407,16 +415,8 @@ import sys, meshio, glob
 m = meshio.read(sorted(glob.glob(sys.argv[1] + "/fields/*.vtu"))[-1])
 print(float(m.cell_data["plastic_strain"][0][0]), float(m.cell_data["temperature"][0][0]))
 "#;
-    let py = std::process::Command::new("python3")
-        .args(["-c", script, out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    let line = String::from_utf8_lossy(&py.stdout);
-    let v: Vec<f64> = line
-        .split_whitespace()
-        .map(|x| x.parse().unwrap())
-        .collect();
-    assert_eq!(v.len(), 2, "{line} {}", String::from_utf8_lossy(&py.stderr));
+    let (v, line) = python_numbers(script, &out);
+    assert_eq!(v.len(), 2, "{line}");
     let (eps, temperature) = (v[0], v[1]);
     assert!(eps > 0.95 && eps < 1.05, "{eps}");
     let t_star = (temperature - THERMAL_ROOM) / (THERMAL_MELT - THERMAL_ROOM);
