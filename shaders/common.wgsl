@@ -58,6 +58,8 @@ struct Control {
     bad_node: atomic<u32>,
     damp_c: f32,          // c = alpha dt_n / 2 of mass damping this step (0 without, and on step 0):
                           // the velocity update, boundaries and contact see the masses (1 + c) m
+    eroded: atomic<u32>,  // elements eroded since the contact surfaces last followed (element.wgsl;
+                          // contact_search.wgsl stops the step for the host: STATE_ERODED)
 }
 
 const FLAG_SAMPLE: u32 = 1u;

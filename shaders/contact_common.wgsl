@@ -26,6 +26,7 @@ const XI_TOLERANCE: f32 = 1e-6;       // crate::contact::narrow::XI_TOLERANCE
 const TIE_TOLERANCE: f32 = 1e-4;      // crate::contact::narrow::TIE_TOLERANCE
 const STIFF_SPRING: f32 = 1.0;        // crate::contact::solve::STIFF_SPRING
 const STATE_SEARCH_GROW: u32 = 4u;    // the host grows a contact buffer and resumes the step
+const STATE_ERODED: u32 = 5u;         // elements eroded: the host moves the surfaces' masks and resumes the step
 
 const SLOT_PENALTY: u32 = 0x10000u;
 const SLOT_WALL: u32 = 0x20000u;
@@ -33,6 +34,10 @@ const SLOT_SECOND: u32 = 0x40000u;    // two-body pass whose slave is the interf
 const SLOT_GROUP: u32 = 0x80000u;     // group pass: the sign follows the body order
 const SLOT_SELF: u32 = 0x100000u;     // group pass that admits the slave's own body
 const SLOT_PERTURBED: u32 = 0x200000u; // perturbed Lagrangian: the spring on the consistent penetration
+// Eroding contact: a candidate slot (a node that erosion may expose) or segment (an element edge)
+// that is not on its surface now; the search skips it (src/gpu/contact/erosion.rs writes the mask).
+const SLOT_OFF: u32 = 0x400000u;
+const SEGMENT_OFF: u32 = 1u;          // Segment.off
 
 // Grow requests (ContactCtl.grow bits).
 const GROW_CANDIDATES: u32 = 1u;
@@ -162,7 +167,7 @@ struct Segment {
     k: f32,               // penalty stiffness
     pass_id: u32,
     body: u32,
-    _p0: u32,
+    off: u32,             // SEGMENT_OFF: a candidate edge not on its body's surface now
     _p1: u32,
     _p2: u32,
 }

@@ -100,8 +100,14 @@ fn prep_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     }
 }
 
-// `plan`'s work.
+// `plan`'s work. After an element eroded (eroding contact: a scene with failure and contact), the
+// step stops here, before the contact stage changed anything, for the host to move the surfaces'
+// masks to the edges the erosion exposed and resume the step with a search (STATE_ERODED).
 fn plan_step() {
+    if (atomicLoad(&ctrl.eroded) != 0u) {
+        ctrl.state = STATE_ERODED;
+        return;
+    }
     let due = atomicExchange(&cc.due, 0u) != 0u;
     let f = select(0u, 1u, due);
     set_ind(0u, f * groups(max(max(cc.p.n_segs, cc.p.n_buckets), max(cc.p.n_local, cc.p.n_slots))));
@@ -176,7 +182,7 @@ fn boxes(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (!contact_running()) {
         return;
     }
-    if (i < cc.p.n_segs) {
+    if (i < cc.p.n_segs && segs[i].off == 0u) {
         let sg = segs[i];
         let lo = min(min(node_x(sg.a), node_x(sg.b)), min(node_xt(sg.a), node_xt(sg.b)));
         let hi = max(max(node_x(sg.a), node_x(sg.b)), max(node_xt(sg.a), node_xt(sg.b)));
@@ -242,7 +248,7 @@ fn bucket_segment(j: u32, fill: bool) {
 // 2b. Segments per bucket.
 @compute @workgroup_size(CG)
 fn seg_count(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if (item_runs(gid.x, cc.p.n_segs)) {
+    if (item_runs(gid.x, cc.p.n_segs) && segs[gid.x].off == 0u) {
         bucket_segment(gid.x, false);
     }
 }
@@ -284,7 +290,7 @@ fn scan_buckets(@builtin(local_invocation_id) lid: vec3<u32>) {
 // 2c. Bucket entries.
 @compute @workgroup_size(CG)
 fn seg_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if (item_runs(gid.x, cc.p.n_segs)) {
+    if (item_runs(gid.x, cc.p.n_segs) && segs[gid.x].off == 0u) {
         bucket_segment(gid.x, true);
     }
 }
@@ -321,7 +327,7 @@ fn admissible(sl: Slot, sg: Segment) -> bool {
 // Visits slot k's candidates: mode 0 counts them, mode 1 writes them from `at` and sorts them.
 fn visit(k: u32, mode: u32, at: u32) -> u32 {
     let sl = slots[k];
-    if ((sl.info & SLOT_WALL) != 0u) {
+    if ((sl.info & (SLOT_WALL | SLOT_OFF)) != 0u) {
         return 0u;
     }
     let a = node_x(sl.s);
@@ -394,7 +400,7 @@ fn slot_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let sl = slots[k];
     var on = n > 0u;
     if ((sl.info & SLOT_WALL) != 0u) {
-        on = wall_near(sl);
+        on = wall_near(sl) && (sl.info & SLOT_OFF) == 0u;
     }
     wss(cc.p.o_aflag + k, select(0u, 1u, on));
     if (!on) {

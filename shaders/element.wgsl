@@ -709,6 +709,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             let half_work = 0.5 * ctrl.dt_prev * (dot(fx, vx) + dot(fy, vy));
             let energy = w * a0t + hg_stored + half_work;
             erosion[e] = vec4<f32>(energy, 1.0, damage, select(select(0.0, 2.0, small_step), 1.0, inverted));
+            // For the contact surfaces to follow (an integer count: no order dependence).
+            atomicAdd(&ctrl.eroded, 1u);
             elem_force[4u * e] = vec2<f32>(0.0);
             elem_force[4u * e + 1u] = vec2<f32>(0.0);
             elem_force[4u * e + 2u] = vec2<f32>(0.0);

@@ -1240,6 +1240,8 @@ mod contact;
 mod device;
 #[path = "gpu/end_time.rs"]
 mod end_time;
+#[path = "gpu/erosion_contact.rs"]
+mod erosion_contact;
 #[path = "gpu/failure.rs"]
 mod failure;
 #[path = "gpu/fuzz.rs"]

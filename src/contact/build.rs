@@ -1,7 +1,8 @@
 //! Building a [`ContactSet`] from a model: the passes of each `[[contact]]` table (a pair's one or
 //! two directions, or a group's one symmetric pass), the walls, the local nodes and masses; and
 //! the same passes and walls again on the surfaces left after erosion ([`rebuild`], called by
-//! [`super::erosion`]), in the local numbering of the first build.
+//! [`super::erosion`]), in the local numbering of the first build, and on every candidate that
+//! erosion may expose ([`every_candidate`], the GPU's fixed lists).
 
 use std::collections::BTreeMap;
 
@@ -34,6 +35,9 @@ struct Builder<'m> {
     model: &'m Model,
     /// Per global element, whether it eroded (empty: none has).
     eroded: &'m [bool],
+    /// The erodible bodies' surfaces are every candidate edge, their free nodes every node
+    /// ([`every_candidate`]).
+    every: bool,
     /// The surfaces of the bodies now (those of `initial` while nothing has eroded).
     surfaces: Vec<Option<Surface>>,
     /// The surfaces of the mesh as meshed.
@@ -53,6 +57,7 @@ impl<'m> Builder<'m> {
         Builder {
             model,
             eroded,
+            every: false,
             surfaces: vec![None; nb],
             initial: vec![None; nb],
             candidates: vec![None; nb],
@@ -84,6 +89,17 @@ impl<'m> Builder<'m> {
 
     /// Body `b`'s surface now: as meshed, or the exposed candidate edges after erosion.
     fn surface(&mut self, b: usize) -> Surface {
+        if self.every && self.erodible(b) {
+            let edges = self.candidates(b).edges.clone();
+            let mut nodes: Vec<u32> = edges.iter().flat_map(|s| s.nodes).collect();
+            nodes.sort_unstable();
+            nodes.dedup();
+            return Surface {
+                body: b,
+                nodes,
+                segments: edges,
+            };
+        }
         if self.eroded.is_empty() || !self.erodible(b) {
             return self.initial_surface(b);
         }
@@ -99,10 +115,15 @@ impl<'m> Builder<'m> {
     /// Body `b`'s free nodes (of eroded elements only), within the nodes of `only` (global node
     /// pairs) if given.
     fn free_nodes(&mut self, b: usize, only: Option<&[[u32; 2]]>) -> Vec<u32> {
-        if self.eroded.is_empty() || !self.erodible(b) {
+        if !self.erodible(b) || (self.eroded.is_empty() && !self.every) {
             return Vec::new();
         }
-        let eroded = self.eroded;
+        let all = if self.every {
+            vec![true; self.model.quads.len()]
+        } else {
+            Vec::new()
+        };
+        let eroded = if self.every { &all[..] } else { self.eroded };
         let mut free = self.candidates(b).free_nodes(eroded);
         if let Some(edges) = only {
             let set: std::collections::HashSet<u32> = edges.iter().flatten().copied().collect();
@@ -523,7 +544,23 @@ pub(super) fn rebuild(
     eroded: &[bool],
     nodes: &[u32],
 ) -> Option<(Vec<Pass>, Vec<Wall>)> {
-    let mut bld = Builder::new(model, eroded);
+    build_on(Builder::new(model, eroded), nodes)
+}
+
+/// The passes and walls of `model` with every slave node and master segment that erosion may
+/// bring onto them: on an erodible body, every edge of its elements is a segment and every node
+/// a slave (the slaves' neighbours and the walls' stiffness are not those of any surface), in the
+/// local numbering `nodes` of the first build; `None` as [`rebuild`]. The GPU keeps these lists
+/// fixed under a mask ([`super::erosion::Masked`]).
+pub(super) fn every_candidate(model: &Model, nodes: &[u32]) -> Option<(Vec<Pass>, Vec<Wall>)> {
+    let mut bld = Builder::new(model, &[]);
+    bld.every = true;
+    build_on(bld, nodes)
+}
+
+/// The passes and walls `bld` builds, in the local numbering `nodes`.
+fn build_on(mut bld: Builder<'_>, nodes: &[u32]) -> Option<(Vec<Pass>, Vec<Wall>)> {
+    let model = bld.model;
     for (l, &g) in nodes.iter().enumerate() {
         bld.local[g as usize] = l as u32;
     }

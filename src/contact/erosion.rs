@@ -15,18 +15,102 @@
 //! neighbours as a fresh build on the remaining mesh: `tests/core/erosion_contact.rs` checks it
 //! against [`crate::model::surface::Surface::of_remaining`]), and recomputes the penalty step.
 //!
-//! How the GPU twin should mirror it: keep the candidate edges and candidate nodes of every
-//! erodible body in its static tables (segments and slots, each with its penalty stiffness
-//! computed once by the same rule), with a mask per candidate edge and per candidate node
-//! written from the per-element eroded flags by one deterministic kernel in the step that
-//! eroded something (an edge: its element alive and the one across it eroded or none; a node:
-//! on an exposed edge, or all its elements eroded; its two neighbours from the exposed edges
-//! that end and start at it); the search and the narrow phase skip masked entries, and the
-//! search is forced in that step. No compaction, no reallocation, and the same bits every run,
-//! since the mask depends only on the flags.
+//! The GPU twin ([`Masked`], used by `crate::gpu::contact`) keeps fixed slot and segment lists
+//! that hold every candidate: every node of an erodible body is a slot of each pass and wall it
+//! takes part in, every edge of its elements a segment. A mask marks those that are not on a
+//! surface now. In the step that eroded an element the device stops before its contact stage;
+//! the host follows the erosion on its copy of the set (this function, from the per-element
+//! flags read back), writes the mask with the slaves' neighbours and stiffnesses of the new
+//! surfaces into the fixed lists ([`Masked::tables`]) and resumes the step with a search, which
+//! skips masked entries. No slot or segment is renumbered, so the constraints' warm starts and
+//! the multipliers that slots carry stay where they are, and the update depends only on the
+//! flags: the same bits every run.
 
-use super::ContactSet;
+use std::collections::HashMap;
+
+use super::{ContactSet, Tables};
 use crate::model::Model;
+
+/// The GPU's fixed contact lists of an eroding scene: the tables of every candidate slot and
+/// segment (`contact::build::every_candidate`), onto which [`Masked::tables`] lays the surfaces
+/// of the moment, the rest masked off.
+#[derive(Debug, Clone)]
+pub struct Masked {
+    /// Every candidate, each off.
+    every: Tables,
+    /// Slot of each (pass, interface, node) among `every`'s slots (walls: pass `u32::MAX`).
+    slot_at: HashMap<(u32, u32, u32), u32>,
+    /// Segment of each (pass, a, b) among `every`'s segments.
+    segment_at: HashMap<(u32, u32, u32), u32>,
+}
+
+impl Masked {
+    /// The candidate lists of `set` (built by [`ContactSet::new`] for `model`); `None` when a
+    /// candidate needs a node outside the set's local nodes (a set not built for `model`).
+    pub fn new(model: &Model, set: &ContactSet) -> Option<Masked> {
+        let (passes, walls) = super::build::every_candidate(model, &set.nodes)?;
+        let mut all = set.clone();
+        all.passes = passes;
+        all.walls = walls;
+        let mut every = all.tables();
+        for s in &mut every.slots {
+            s.off = true;
+            s.neighbours = [s.node; 2];
+            s.neighbour_slots = [u32::MAX; 2];
+        }
+        for g in &mut every.segments {
+            g.off = true;
+        }
+        let slot_at = every
+            .slots
+            .iter()
+            .enumerate()
+            .map(|(k, s)| ((s.pass, s.interface, s.node), k as u32))
+            .collect();
+        let segment_at = every
+            .segments
+            .iter()
+            .enumerate()
+            .map(|(k, g)| ((g.pass, g.nodes[0], g.nodes[1]), k as u32))
+            .collect();
+        Some(Masked {
+            every,
+            slot_at,
+            segment_at,
+        })
+    }
+
+    /// Slots and segments of the fixed lists.
+    pub fn sizes(&self) -> (usize, usize) {
+        (self.every.slots.len(), self.every.segments.len())
+    }
+
+    /// The tables of `set` (as it follows erosion) laid out on the fixed lists: each of its
+    /// slots and segments at its candidate's place (the slots' neighbour slots renumbered), every
+    /// other candidate off. `None` when one of them is not a candidate.
+    pub fn tables(&self, set: &ContactSet) -> Option<Tables> {
+        let now = set.tables();
+        let at: Vec<u32> = now
+            .slots
+            .iter()
+            .map(|s| self.slot_at.get(&(s.pass, s.interface, s.node)).copied())
+            .collect::<Option<_>>()?;
+        let mut out = self.every.clone();
+        for (s, &k) in now.slots.iter().zip(&at) {
+            let mut t = *s;
+            t.neighbour_slots = s
+                .neighbour_slots
+                .map(|j| at.get(j as usize).copied().unwrap_or(u32::MAX));
+            out.slots[k as usize] = t;
+        }
+        for g in &now.segments {
+            let k = *self.segment_at.get(&(g.pass, g.nodes[0], g.nodes[1]))?;
+            out.segments[k as usize] = *g;
+        }
+        out.margin = now.margin;
+        Some(out)
+    }
+}
 
 impl ContactSet {
     /// Follows erosion: the passes' slave nodes and master segments and the walls' nodes become

@@ -46,6 +46,9 @@ pub struct SlotTable {
     pub group: bool,
     /// The pass admits self-contact (see [`super::narrow::admissible`]).
     pub self_contact: bool,
+    /// A candidate node of an eroding body that is not a slave now (the GPU's masked tables,
+    /// [`super::erosion::Masked`]); never in [`ContactSet::tables`].
+    pub off: bool,
 }
 
 /// A master segment of the GPU contact kernel.
@@ -59,6 +62,9 @@ pub struct SegmentTable {
     pub pass: u32,
     /// The segment's body.
     pub body: u32,
+    /// A candidate edge of an eroding body that is not on its surface now (the GPU's masked
+    /// tables, [`super::erosion::Masked`]); never in [`ContactSet::tables`].
+    pub off: bool,
 }
 
 /// The flat, static tables of a contact set, for the GPU kernel.
@@ -116,6 +122,7 @@ impl ContactSet {
                     body: p.slave_body[si],
                     group: p.group,
                     self_contact: p.self_contact,
+                    off: false,
                 });
             }
             segments.extend(
@@ -128,6 +135,7 @@ impl ContactSet {
                         stiffness,
                         pass: pi as u32,
                         body,
+                        off: false,
                     }),
             );
         }
@@ -152,6 +160,7 @@ impl ContactSet {
                     body: w.body[idx],
                     group: false,
                     self_contact: false,
+                    off: false,
                 });
             }
         }

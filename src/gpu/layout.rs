@@ -67,7 +67,13 @@ pub struct Control {
     pub bad_element: u32,
     pub bad_node: u32,
     pub damp_c: f32,
+    /// Elements eroded since the contact surfaces last followed erosion (element.wgsl; the host
+    /// clears it when it moves them: [`crate::gpu::contact::STATE_ERODED`]).
+    pub eroded: u32,
 }
+
+/// Byte offset of `Control::eroded`, for clearing it with a 4-byte write.
+pub const CONTROL_ERODED_OFFSET: u64 = 84;
 
 /// Byte offset of `Control::state`, for un-pausing with a 4-byte write.
 pub const CONTROL_STATE_OFFSET: u64 = 40;
@@ -102,9 +108,10 @@ pub const STATE_FAILED: u32 = 3;
 pub const NONE: u32 = u32::MAX;
 
 const _: () = assert!(std::mem::size_of::<Params>() == 112);
-const _: () = assert!(std::mem::size_of::<Control>() == 84);
+const _: () = assert!(std::mem::size_of::<Control>() == 88);
 const _: () = assert!(std::mem::size_of::<Instance>() == 32);
 const _: () = assert!(std::mem::offset_of!(Control, state) as u64 == CONTROL_STATE_OFFSET);
+const _: () = assert!(std::mem::offset_of!(Control, eroded) as u64 == CONTROL_ERODED_OFFSET);
 
 /// Ticks per end time: the GPU keeps time as a 64-bit count of `end_time / 2^40` (fewer ticks
 /// for an end time so short that `2^40 / end_time` ticks per second overflows `f32`, see

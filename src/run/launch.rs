@@ -368,13 +368,6 @@ pub fn choose_solver(
         || -> Box<dyn Solver> { Box::new(CpuSolver::new(model.clone(), plan.clone(), schedule)) };
     Ok(match backend {
         Backend::Cpu => cpu(),
-        Backend::Auto if crate::gpu::solver::eroding_contact(plan) => {
-            notice(
-                "eroding contact (failure with contact or rigid walls) runs on the CPU reference \
-                 only so far: running on the CPU",
-            );
-            cpu()
-        }
         Backend::Auto => match GpuContext::new(adapter) {
             Ok(ctx) if ctx.is_software() && !adapter_named(adapter) => {
                 notice(&format!(

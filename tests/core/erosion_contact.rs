@@ -8,13 +8,18 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use ricochet::contact::ContactSet;
+use ricochet::contact::erosion::Masked;
+use ricochet::contact::{ContactSet, Tables};
 use ricochet::model::surface::{EdgeCandidates, Surface};
 use ricochet::model::Model;
 use ricochet::step::cpu::CpuSolver;
 use ricochet::step::{Event, Sample, Solver};
 
 use crate::common::*;
+
+#[path = "../shared/perforation.rs"]
+mod perforation;
+use perforation::{deepest_in_remaining, perforation, FALLING_BLOCK, MATERIALS};
 
 /// A deterministic pattern of eroded elements: each with probability `p` (a linear congruential
 /// generator seeded with `seed`).
@@ -48,26 +53,6 @@ fn free_nodes(model: &Model, b: usize, eroded: &[bool]) -> Vec<u32> {
         .map(|n| n as u32)
         .collect()
 }
-
-/// A steel with a plastic-strain limit, and one without.
-const MATERIALS: &str = r#"
-[[material]]
-name = "soft"
-model = "j2_plastic"
-density = 7850.0
-youngs_modulus = 2.0e11
-poisson_ratio = 0.3
-yield_stress = 3.0e8
-hardening_modulus = 1.0e9
-failure = { plastic_strain = 0.3 }
-
-[[material]]
-name = "hard"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.0e11
-poisson_ratio = 0.3
-"#;
 
 #[test]
 fn the_masked_candidate_edges_are_the_boundary_of_the_remaining_elements() {
@@ -115,6 +100,31 @@ fn the_masked_candidate_edges_are_the_boundary_of_the_remaining_elements() {
     assert!(tris > 0 && checked == 3 * 42);
 }
 
+/// The GPU's fixed lists ([`Masked`]) laid out for `set` (whose sides are `want`): the sizes
+/// of the lists, the sides of their entries not masked, as many as `set`'s tables hold, and each
+/// slave's neighbour slots on the slots of its neighbours.
+fn assert_masked_as_followed(masked: &Masked, set: &ContactSet, want: &Sides) {
+    let t = masked
+        .tables(set)
+        .expect("every surface entry is a candidate");
+    assert_eq!((t.slots.len(), t.segments.len()), masked.sizes());
+    assert_eq!(&table_sides(&t), want);
+    let now = set.tables();
+    assert_eq!(t.slots.iter().filter(|s| !s.off).count(), now.slots.len());
+    assert_eq!(
+        t.segments.iter().filter(|s| !s.off).count(),
+        now.segments.len()
+    );
+    for s in t.slots.iter().filter(|s| !s.off) {
+        for (k, &j) in s.neighbour_slots.iter().enumerate() {
+            if j != u32::MAX {
+                let n = &t.slots[j as usize];
+                assert!(!n.off && n.pass == s.pass && n.node == s.neighbours[k]);
+            }
+        }
+    }
+}
+
 /// What a contact set's tables hold, in global node numbers: per (pass, body), its master
 /// segments and its slave nodes with their neighbours; per (wall interface, body), its nodes.
 #[derive(Debug, Default, PartialEq)]
@@ -125,16 +135,20 @@ struct Sides {
 }
 
 fn sides(set: &ContactSet) -> Sides {
-    let t = set.tables();
+    table_sides(&set.tables())
+}
+
+/// The [`Sides`] of tables `t`, their masked entries left out.
+fn table_sides(t: &Tables) -> Sides {
     let g = |l: u32| t.nodes[l as usize];
     let mut out = Sides::default();
-    for s in &t.segments {
+    for s in t.segments.iter().filter(|s| !s.off) {
         out.segments
             .entry((s.pass, s.body))
             .or_default()
             .insert(s.nodes.map(g));
     }
-    for s in &t.slots {
+    for s in t.slots.iter().filter(|s| !s.off) {
         if s.wall {
             out.walls
                 .entry((s.interface, s.body))
@@ -231,6 +245,9 @@ fn two_body_group_self_contact_and_walls_follow_erosion() {
         assert_eq!(set.tables().slots, fresh_set.tables().slots);
         assert_eq!(set.tables().segments, fresh_set.tables().segments);
         assert_eq!(fresh, expected(&model, &fresh, &vec![false; ne]));
+        // The GPU's fixed lists under their mask: the same sides as built.
+        let masked = Masked::new(&model, &fresh_set).unwrap();
+        assert_masked_as_followed(&masked, &fresh_set, &fresh);
         let striker = model.bodies[2].elements.clone();
         for (k, p) in [0.1, 0.3, 0.6, 1.0].iter().enumerate() {
             for seed in 0..4 {
@@ -243,6 +260,7 @@ fn two_body_group_self_contact_and_walls_follow_erosion() {
                 assert!(set.follow_erosion(&model, &eroded));
                 let got = sides(&set);
                 assert_eq!(got, expected(&model, &fresh, &eroded), "{contacts}");
+                assert_masked_as_followed(&masked, &set, &got);
                 // The search is forced, and the pass runs.
                 let searches = set.searches();
                 let n = model.node_count();
@@ -253,47 +271,6 @@ fn two_body_group_self_contact_and_walls_follow_erosion() {
             }
         }
     }
-}
-
-/// A plane-strain projectile (hard, 10 x 10 mm, 0.5 mm elements) at `speed` m/s onto a plate
-/// (40 x 4 mm, 0.5 mm elements, a 0.3 plastic-strain limit, stiffness hourglass control: with
-/// the viscous default an element at the projectile's corner inverts before it erodes) held at
-/// both ends, with `contact`. At 400 m/s the plug leaves after about 6 us (48 elements eroded,
-/// 256 m/s left, 2026-11-27).
-fn perforation(speed: f64, contact: &str) -> String {
-    format!(
-        r#"
-[run]
-end_time = 6.0e-5
-history_interval = 5.0e-7
-time_step_scale = 0.5
-{MATERIALS}
-[[body]]
-name = "plate"
-material = "soft"
-mesh = {{ rectangle = {{ origin = [-0.02, 0.0], size = [0.04, 0.004], cells = [80, 8] }} }}
-hourglass = {{ form = "stiffness", coefficient = 0.1 }}
-
-[[body]]
-name = "projectile"
-material = "hard"
-mesh = {{ rectangle = {{ origin = [-0.005, 0.00401], size = [0.01, 0.01], cells = [10, 10] }} }}
-initial_velocity = [0.0, {v:e}]
-
-[[boundary]]
-body = "plate"
-region = {{ min = [-1.0, -1.0], max = [-0.0199, 1.0] }}
-velocity = {{ x = 0.0, y = 0.0 }}
-
-[[boundary]]
-body = "plate"
-region = {{ min = [0.0199, -1.0], max = [1.0, 1.0] }}
-velocity = {{ x = 0.0, y = 0.0 }}
-
-{contact}
-"#,
-        v = -speed
-    )
 }
 
 /// The history samples of a run of `text` to its end, and the solver.
@@ -313,62 +290,6 @@ fn run_samples(text: &str) -> (CpuSolver, Vec<Sample>) {
         }
     }
     (solver, samples)
-}
-
-/// How far `p` lies inside the convex quad or triangle `x` (counter-clockwise): the smallest
-/// distance to the lines of its sides (<= 0 outside).
-fn inside_depth(x: &[[f64; 2]; 4], p: [f64; 2]) -> f64 {
-    (0..4)
-        .filter(|&a| x[a] != x[(a + 1) % 4])
-        .map(|a| {
-            let (s, t) = (x[a], x[(a + 1) % 4]);
-            let d = [t[0] - s[0], t[1] - s[1]];
-            (d[0] * (p[1] - s[1]) - d[1] * (p[0] - s[0])) / d[0].hypot(d[1])
-        })
-        .fold(f64::INFINITY, f64::min)
-}
-
-/// Whether node `n` of body `b` has only eroded elements (a free node).
-fn is_free(model: &Model, b: usize, n: usize, eroded: &[bool]) -> bool {
-    model.bodies[b]
-        .elements
-        .clone()
-        .filter(|&f| model.quads[f].contains(&(n as u32)))
-        .all(|f| eroded[f])
-}
-
-/// The deepest any node of one body lies inside a remaining (not eroded) element of another;
-/// and of a body's own remaining elements that do not hold them, the deepest of its nodes that
-/// are not free and the deepest of its free nodes.
-fn deepest_in_remaining(model: &Model, u: &[[f64; 2]], eroded: &[bool]) -> [f64; 3] {
-    let x = |n: usize| {
-        [
-            model.position[n][0] + u[n][0],
-            model.position[n][1] + u[n][1],
-        ]
-    };
-    let mut worst = [0.0f64; 3];
-    for (i, a) in model.bodies.iter().enumerate() {
-        for (j, b) in model.bodies.iter().enumerate() {
-            for e in b.elements.clone().filter(|&e| !eroded[e]) {
-                let c = model.quads[e].map(|n| x(n as usize));
-                for n in a.nodes.clone() {
-                    if model.quads[e].contains(&(n as u32)) {
-                        continue;
-                    }
-                    let k = if i != j {
-                        0
-                    } else if is_free(model, i, n, eroded) {
-                        2
-                    } else {
-                        1
-                    };
-                    worst[k] = worst[k].max(inside_depth(&c, x(n)));
-                }
-            }
-        }
-    }
-    worst
 }
 
 #[test]
@@ -452,36 +373,7 @@ fn assert_perforates(label: &str, text: &str, own: bool) {
 
 #[test]
 fn free_nodes_of_eroded_elements_stop_on_a_rigid_wall() {
-    // The stretched block of tests/core/failure.rs, falling onto a floor: every element erodes
-    // within 2e-5 s, and every node then falls on as a free mass until the wall stops it.
-    let text = r#"
-[run]
-end_time = 1.0e-4
-history_interval = 1.0e-6
-
-[[material]]
-name = "aluminium"
-model = "j2_plastic"
-density = 2700.0
-youngs_modulus = 7.0e10
-poisson_ratio = 0.33
-yield_stress = 2.0e7
-hardening_modulus = 2.0e8
-failure = { plastic_strain = 1.0e-4 }
-
-[[body]]
-name = "block"
-material = "aluminium"
-mesh = { rectangle = { origin = [0.0, 0.001], size = [0.02, 0.04], cells = [4, 8] } }
-velocity_gradient = [[0.0, 0.0], [0.0, 2000.0]]
-initial_velocity = [0.0, -100.0]
-
-[[rigid_wall]]
-name = "floor"
-point = [0.0, 0.0]
-normal = [0.0, 1.0]
-method = "lagrange"
-"#;
+    let text = FALLING_BLOCK;
     let (solver, _) = run_samples(text);
     assert!(solver.eroded().iter().all(|&e| e));
     let model = solver.model();

@@ -37,7 +37,7 @@ const CRITERIA: [&str; 2] = [
 ];
 
 /// The samples and snapshots of a run of `solver` to its end.
-fn run_to_end(solver: &mut dyn Solver) -> (Vec<Sample>, Vec<Snapshot>) {
+pub(crate) fn run_to_end(solver: &mut dyn Solver) -> (Vec<Sample>, Vec<Snapshot>) {
     let (mut samples, mut snaps, mut events) = (Vec::new(), Vec::new(), Vec::new());
     while !solver.finished() {
         solver.advance(&mut events).expect("advance");
@@ -295,44 +295,6 @@ fn a_scene_without_failure_compiles_no_failure_check_or_buffers() {
         assert_eq!(names.contains(&"body_failure"), with, "{names:?}");
         assert_eq!(gpu.kernels().features.failure, with);
     }
-}
-
-/// Eroding contact runs on the CPU reference only: a scene with failure and a rigid wall is
-/// refused by `--backend gpu` with a message saying why and what to use (its surfaces would stay
-/// as meshed while elements erode), the GPU solver refuses it through the library too, and the
-/// same scene without the wall runs on the GPU.
-#[test]
-fn the_gpu_refuses_failure_with_contact_which_only_the_cpu_follows() {
-    let Some(ctx) = context() else { return };
-    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let plain = block(CRITERIA[0]);
-    let walled = format!(
-        "{plain}\n[[rigid_wall]]\nname = \"floor\"\npoint = [0.0, -0.001]\nnormal = [0.0, 1.0]\n"
-    );
-    let (scene, model, plan) = load(&walled, "walled_block.toml");
-    let err = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene))
-        .err()
-        .map(|e| e.to_string())
-        .unwrap_or_default();
-    assert!(
-        err.contains("eroding contact") && err.contains("--backend cpu"),
-        "{err}"
-    );
-    let (scene, model, plan) = load(&plain, "block.toml");
-    assert!(GpuSolver::new(ctx, &model, &plan, schedule(&scene)).is_ok());
-    let base = std::env::temp_dir().join(format!("ricochet-gpu-walled-{}", std::process::id()));
-    std::fs::create_dir_all(&base).unwrap();
-    let path = base.join("walled_block.toml");
-    std::fs::write(&path, &walled).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_ricochet"))
-        .args(["run", path.to_str().unwrap(), "--backend", "gpu", "--out"])
-        .arg(base.join("out"))
-        .output()
-        .expect("run the binary");
-    let _ = std::fs::remove_dir_all(&base);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("eroding contact"), "{stderr}");
 }
 
 /// The thermal softening verification case (`assets/verification/thermal_softening.toml`) at

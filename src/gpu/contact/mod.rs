@@ -40,7 +40,8 @@ pub use options::{one_group, ContactOptions};
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-use crate::contact::ContactSet;
+use crate::contact::erosion::Masked;
+use crate::contact::{ContactSet, Tables};
 use crate::error::{Error, Result};
 use crate::model::Model;
 
@@ -52,6 +53,9 @@ pub const COMMON: &str = include_str!("../../../shaders/contact_common.wgsl");
 
 /// Control state set when a contact buffer must grow (WGSL `STATE_SEARCH_GROW`).
 pub const STATE_SEARCH_GROW: u32 = 4;
+/// Control state set when elements eroded in a scene with contact (WGSL `STATE_ERODED`): the
+/// host moves the surfaces (`ContactState::follow_erosion`) and resumes the step.
+pub const STATE_ERODED: u32 = 5;
 
 /// [`ContactState::record_parts`]: the node preparation and the search plan.
 pub const PART_PREP: u32 = 1;
@@ -245,6 +249,14 @@ impl Dispatch<'_> {
     }
 }
 
+/// The error of eroding contact tables that cannot be built or followed (`what` of them).
+fn unfollowed(what: &str) -> Error {
+    Error::Gpu(format!(
+        "cannot {what} the eroding contact's candidate lists: a surface node or edge is not a \
+         candidate of its body"
+    ))
+}
+
 /// Workgroups of [`CG`] threads over `n` items (at least one).
 pub(crate) fn groups(n: u32) -> u32 {
     n.div_ceil(CG).max(1)
@@ -368,6 +380,9 @@ pub struct ContactState {
     pub grows: u32,
     /// The stage in one workgroup before the search and one after it ([`one`]).
     one: bool,
+    /// Eroding contact (a scene with failure): the fixed candidate lists and the model whose
+    /// surfaces they follow.
+    eroding: Option<(Masked, Box<Model>)>,
 }
 
 fn make_bind(
@@ -418,7 +433,16 @@ impl ContactState {
             extrapolate,
             one,
         } = path;
-        let t = set.tables();
+        let eroding = if model.has_erosion() {
+            let masked = Masked::new(model, &set).ok_or_else(|| unfollowed("build"))?;
+            Some((masked, Box::new(model.clone())))
+        } else {
+            None
+        };
+        let t = match &eroding {
+            Some((m, _)) => m.tables(&set).ok_or_else(|| unfollowed("lay out"))?,
+            None => set.tables(),
+        };
         let nl = t.nodes.len();
         let c_ref = tables::reference(&t);
         let node_words = tables::node_words(&t);
@@ -568,7 +592,44 @@ impl ContactState {
             ind_bind,
             grows: 0,
             one,
+            eroding,
         })
+    }
+
+    /// After a step stopped with [`STATE_ERODED`]: the surfaces follow the elements flagged in
+    /// `eroded` (per global element) on the host's copy of the set, whose slots and segments
+    /// are written into the fixed lists under their mask, and a search is marked due, so that
+    /// the resumed step searches the new surfaces. Returns the penalty springs' step now.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when a surface node or edge is not among the candidates.
+    pub(crate) fn follow_erosion(
+        &mut self,
+        queue: &wgpu::Queue,
+        eroded: &[bool],
+    ) -> Result<Option<f64>> {
+        let Some((masked, model)) = &self.eroding else {
+            return Err(unfollowed("follow"));
+        };
+        // As on the CPU: a set that cannot follow (never with a set built for this model)
+        // keeps its surfaces.
+        self.set.follow_erosion(model, eroded);
+        let t: Tables = masked
+            .tables(&self.set)
+            .ok_or_else(|| unfollowed("lay out"))?;
+        let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
+        let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
+        for (binding, bytes) in [
+            (7, bytemuck::cast_slice::<GpuSlot, u8>(&slots)),
+            (8, bytemuck::cast_slice::<GpuSegment, u8>(&segs)),
+        ] {
+            if let (Some(b), false) = (self.binding(binding), bytes.is_empty()) {
+                queue.write_buffer(b, 0, bytes);
+            }
+        }
+        // Counters: due = 1 (offset 0).
+        queue.write_buffer(&self.ctl, PARAMS_SIZE, bytemuck::bytes_of(&1u32));
+        Ok(self.set.penalty_step().map(|(dt, _)| dt))
     }
 
     /// The penalty springs' stable step and what sets it.

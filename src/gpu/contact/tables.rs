@@ -57,8 +57,11 @@ pub struct GpuSegment {
     pub pass: u32,
     /// The segment's body.
     pub body: u32,
+    /// 1: a candidate edge of an eroding body that is not on its surface now (WGSL
+    /// `SEGMENT_OFF`).
+    pub off: u32,
     /// Padding to 32 bytes.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
 }
 
 const _: () = assert!(std::mem::size_of::<GpuSlot>() == 64);
@@ -73,7 +76,8 @@ impl From<&SlotTable> for GpuSlot {
                 | (u32::from(s.second_is_slave) << 18)
                 | (u32::from(s.group) << 19)
                 | (u32::from(s.self_contact) << 20)
-                | (u32::from(s.perturbed) << 21),
+                | (u32::from(s.perturbed) << 21)
+                | (u32::from(s.off) << 22),
             s: s.node,
             np: s.neighbours[0],
             nn: s.neighbours[1],
@@ -99,7 +103,8 @@ impl From<&SegmentTable> for GpuSegment {
             k: s.stiffness as f32,
             pass: s.pass,
             body: s.body,
-            _pad: [0; 3],
+            off: u32::from(s.off),
+            _pad: [0; 2],
         }
     }
 }

@@ -39,20 +39,6 @@ pub type NodalField = Vec<[f64; 2]>;
 /// Fewest steps recorded per submission (the most: [`MAX_BATCH`]).
 pub const MIN_BATCH: u32 = 32;
 
-/// Why the GPU refuses a scene with both failure and contact: its contact surfaces would stay as
-/// meshed while elements erode (the CPU reference follows erosion: `contact::erosion`).
-pub const ERODING_CONTACT: &str = "eroding contact (a material's `failure`, or \
-     `run.erosion.inverted` or `min_time_step`, in a scene with \
-     `[[contact]]` or `[[rigid_wall]]`) runs on the CPU reference only so far: the GPU erodes \
-     elements but does not yet move its contact surfaces onto the edges they expose; use \
-     --backend cpu";
-
-/// Whether a plan erodes elements and has contact (pairs, groups or rigid walls): a scene whose
-/// contact surfaces must follow erosion, which only the CPU reference does so far.
-pub fn eroding_contact(plan: &Plan) -> bool {
-    plan.has(Stage::Failure) && plan.has(Stage::Contact)
-}
-
 /// Explicit central-difference integration on the GPU (f32).
 #[derive(Debug)]
 pub struct GpuSolver {
@@ -78,6 +64,13 @@ pub struct GpuSolver {
     rows_readback: wgpu::Buffer,
     /// Rows from `rows_read` on copied with the last submission (most batches write one).
     spec_rows: u32,
+    /// The step at which the last submission began.
+    batch_start: u32,
+    /// The most steps a submission records while elements erode in a scene with contact: each
+    /// erosion stops the submission, and the steps recorded after the stop still cost their
+    /// (empty) dispatches, so the cap is twice the steps before the last stop, doubled after
+    /// each submission without one, up to [`MAX_BATCH`].
+    erosion_cap: u32,
 }
 
 /// History rows copied with each submission, so that the usual batch (one sample) needs one
@@ -127,9 +120,6 @@ impl GpuSolver {
         fused: Option<bool>,
         contact: ContactOptions,
     ) -> Result<Self> {
-        if eroding_contact(plan) {
-            return Err(Error::Gpu(ERODING_CONTACT.into()));
-        }
         let cpu_adapter = ctx.info.device_type == wgpu::DeviceType::Cpu;
         let any = |f: &dyn Fn(&crate::model::BodyModel) -> bool| model.bodies.iter().any(f);
         use crate::scene::{ContactMethod, Formulation, HourglassForm, MaterialModel};
@@ -291,6 +281,8 @@ impl GpuSolver {
             counters_at,
             rows_readback,
             spec_rows: 0,
+            batch_start: 0,
+            erosion_cap: MAX_BATCH,
         })
     }
 
@@ -368,7 +360,9 @@ impl GpuSolver {
             next = next.min(((t / fi).floor() + 1.0) * fi);
         }
         let steps = ((next - t) / self.dt_estimate).ceil() + 2.0;
-        (steps.max(0.0) as u32).clamp(MIN_BATCH, MAX_BATCH)
+        (steps.max(0.0) as u32)
+            .clamp(MIN_BATCH, MAX_BATCH)
+            .min(self.erosion_cap)
     }
 
     /// History rows a batch of `steps` steps is expected to write (at most [`SPEC_ROWS`]): one
@@ -392,6 +386,7 @@ impl GpuSolver {
     /// Records `steps` steps in one submission, with a copy of the control block and history
     /// into the readback buffer at the end.
     pub fn submit(&mut self, steps: u32) {
+        self.batch_start = self.ctrl.step;
         let enc = self.encode_pass("steps", |pass| {
             for _ in 0..steps {
                 self.state.record_step(&self.kernels, pass);
@@ -456,6 +451,49 @@ impl GpuSolver {
             ));
         };
         c.grow(device, &self.ctx.queue, k)?;
+        self.resume_step();
+        Ok(())
+    }
+
+    /// Elements eroded in a scene with contact and the step stopped before its contact stage:
+    /// reads the eroded flags, moves the contact surfaces onto the edges they expose (and the
+    /// penalty springs' step with them), and resumes the step from its contact stage.
+    fn contact_follow_erosion(&mut self) -> Result<()> {
+        let Some(buf) = self.state.erosion.clone() else {
+            return Err(Error::Gpu("erosion stop without erosion state".into()));
+        };
+        let ne = self.state.params.n_elems as u64;
+        let bytes = self.read_copies("erosion_readback", &[(&buf, 0, 16 * ne)])?;
+        let f: &[f32] = bytemuck::cast_slice(&bytes);
+        let eroded: Vec<bool> = (0..ne as usize).map(|e| f[4 * e + 1] != 0.0).collect();
+        let queue = &self.ctx.queue;
+        let Some(c) = self.state.contact.as_mut() else {
+            return Err(Error::Gpu("erosion stop without contact buffers".into()));
+        };
+        let penalty = c.follow_erosion(queue, &eroded)?.unwrap_or(0.0) as f32;
+        if penalty != self.state.params.penalty_dt {
+            self.state.params.penalty_dt = penalty;
+            if let Some((_, b)) = self.state.buffers.iter().find(|(n, _)| *n == "params") {
+                queue.write_buffer(
+                    b,
+                    std::mem::offset_of!(Params, penalty_dt) as u64,
+                    bytemuck::bytes_of(&penalty),
+                );
+            }
+        }
+        queue.write_buffer(
+            &self.state.ctrl,
+            CONTROL_ERODED_OFFSET,
+            bytemuck::bytes_of(&0u32),
+        );
+        let ran = self.ctrl.step.saturating_sub(self.batch_start);
+        self.erosion_cap = (2 * ran).clamp(2, MAX_BATCH);
+        self.resume_step();
+        Ok(())
+    }
+
+    /// Resumes a step that a contact stop interrupted, from its contact stage.
+    fn resume_step(&mut self) {
         self.ctx.queue.write_buffer(
             &self.state.ctrl,
             CONTROL_STATE_OFFSET,
@@ -466,7 +504,6 @@ impl GpuSolver {
         });
         self.ctx.queue.submit([enc.finish()]);
         self.counters.submissions += 1;
-        Ok(())
     }
 
     /// Takes about `steps` steps (the step a contact search interrupted counts once), in

@@ -6,8 +6,9 @@
 
 use crate::contact::ContactSample;
 use crate::error::{Error, Result};
-use crate::gpu::contact::{ContactCounters, STATE_SEARCH_GROW};
+use crate::gpu::contact::{ContactCounters, STATE_ERODED, STATE_SEARCH_GROW};
 use crate::gpu::layout::*;
+use crate::gpu::state::MAX_BATCH;
 use crate::step::{Event, Failure, Sample};
 
 use super::GpuSolver;
@@ -83,11 +84,16 @@ impl GpuSolver {
             self.dt_estimate = ctrl.dt_next as f64;
         }
         self.ctrl = ctrl;
-        if ctrl.state == STATE_SEARCH_GROW {
-            self.contact_grow()?;
+        if ctrl.state == STATE_SEARCH_GROW || ctrl.state == STATE_ERODED {
+            if ctrl.state == STATE_ERODED {
+                self.contact_follow_erosion()?;
+            } else {
+                self.contact_grow()?;
+            }
             events.extend(row_events);
             return Ok(());
         }
+        self.erosion_cap = (2 * self.erosion_cap).min(MAX_BATCH);
         let snapshot_done = ctrl.state == STATE_DONE && ctrl.flags & FLAG_SNAPSHOT != 0;
         if ctrl.state == STATE_PAUSED || snapshot_done {
             let (step, time) = if ctrl.state == STATE_PAUSED {

@@ -1,0 +1,131 @@
+//! Eroding contact on the GPU against the CPU reference (lavapipe in CI; issue 37 item 4): a
+//! projectile perforating a plate, with a two-pass contact and with `bodies = "all"` and
+//! self-contact, where the contact surfaces follow the edges erosion exposes. Both backends
+//! perforate with the same residual velocity (within 1 %), the GPU's two runs give the same
+//! bits, the energy balances with the eroded energy counted, and no node of one body ends
+//! inside a remaining element of the other. Free nodes of eroded elements stop on a rigid wall
+//! as on the CPU.
+
+use super::*;
+
+use ricochet::output::history::EnergyAudit;
+use ricochet::step::{Sample, Snapshot};
+
+use crate::failure::run_to_end;
+
+#[path = "../shared/perforation.rs"]
+mod perforation;
+use perforation::{deepest_in_remaining, perforation, FALLING_BLOCK};
+
+/// The samples and snapshots of a run of `text` on the CPU reference, and of two runs on the
+/// GPU of `ctx`.
+#[allow(clippy::type_complexity)]
+fn both_backends(
+    ctx: &Arc<GpuContext>,
+    text: &str,
+) -> (
+    (Vec<Sample>, Vec<Snapshot>),
+    [(Vec<Sample>, Vec<Snapshot>); 2],
+) {
+    let (scene, model, plan) = load(text, "eroding_contact.toml");
+    let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
+    let cpu_run = run_to_end(&mut cpu);
+    let gpu_run = || {
+        let mut gpu =
+            GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu solver");
+        run_to_end(&mut gpu)
+    };
+    (cpu_run, [gpu_run(), gpu_run()])
+}
+
+#[test]
+fn gpu_perforation_follows_erosion_as_the_cpu_does_and_repeats_bit_for_bit() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    for (contact, own) in [
+        (
+            "[[contact]]\nbodies = [\"projectile\", \"plate\"]\nmethod = \"lagrange\"\ntwo_pass = true\n",
+            false,
+        ),
+        (
+            "[[contact]]\nbodies = \"all\"\nself_contact = true\nmethod = \"lagrange\"\n",
+            true,
+        ),
+    ] {
+        // A snapshot at the end (6e-5 s): the nodes and the eroded flags.
+        let text = perforation(400.0, contact).replace("[run]\n", "[run]\nfield_interval = 6.0e-5\n");
+        let (name, model, _) = load(&text, "perforation.toml");
+        let ((cs, _), [(gs, gsnap), (gs2, gsnap2)]) = both_backends(&ctx, &text);
+        // The same bits twice: every history row and the nodes at the end.
+        assert_eq!(gs, gs2, "{contact}");
+        assert_eq!(gsnap, gsnap2, "{contact}");
+        let (c, g) = (cs.last().unwrap(), gs.last().unwrap());
+        let end = gsnap.last().expect("a snapshot at the end");
+        // Perforated on both: the projectile (body 1) still moving down with the same speed
+        // within 1 %, past the plate's far side (y = 0).
+        let (vc, vg) = (c.body_velocity[1][1], g.body_velocity[1][1]);
+        let nose = model.bodies[1]
+            .nodes
+            .clone()
+            .map(|n| model.position[n][1] + end.displacement[n][1])
+            .fold(f64::INFINITY, f64::min);
+        let [deepest, own_surface, _] = deepest_in_remaining(&model, &end.displacement, &end.eroded);
+        let audit = |s: &[Sample]| {
+            let mut a = EnergyAudit::default();
+            for x in s {
+                a.error(x);
+            }
+            a.max_error
+        };
+        let (ec, eg) = (audit(&cs), audit(&gs));
+        println!(
+            "{}: {contact}residual velocity cpu {vc:.2} gpu {vg:.2} m/s ({:.3} %), eroded cpu {} \
+             gpu {}, nose at {nose:.3e} m, deepest node in a remaining element of the other body \
+             {deepest:.2e} m, of its own {own_surface:.2e} m, energy error cpu {ec:.2e} gpu {eg:.2e}",
+            name.name,
+            100.0 * (vg / vc - 1.0).abs(),
+            c.eroded_elements,
+            g.eroded_elements,
+        );
+        assert!(vc < -100.0 && vg < -100.0, "{vc} {vg}");
+        assert!((vg / vc - 1.0).abs() < 0.01, "{vc} {vg}");
+        assert!(nose < 0.0, "{nose}");
+        assert!(g.eroded_elements > 0 && g.eroded_energy > 0.0);
+        assert_eq!(
+            end.eroded.iter().filter(|&&e| e).count() as u64,
+            g.eroded_elements
+        );
+        // The bounds of the CPU's test (tests/core/erosion_contact.rs): no node inside a
+        // remaining element of the other body (0.1 % of an element), nor with self-contact a
+        // node of the plate's surface inside its own; the energy audit of a contact run.
+        assert!(deepest < 5e-7, "{deepest:e}");
+        if own {
+            assert!(own_surface < 5e-7, "{own_surface:e}");
+        }
+        assert!(eg < 1e-3, "{eg}");
+    }
+}
+
+#[test]
+fn gpu_free_nodes_of_eroded_elements_stop_on_a_rigid_wall_as_on_the_cpu() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text = FALLING_BLOCK.replace("[run]\n", "[run]\nfield_interval = 1.0e-4\n");
+    let ((_, csnap), [(gs, gsnap), (gs2, gsnap2)]) = both_backends(&ctx, &text);
+    assert_eq!(gs, gs2);
+    assert_eq!(gsnap, gsnap2);
+    let (c, g) = (csnap.last().unwrap(), gsnap.last().unwrap());
+    assert!(g.eroded.iter().all(|&e| e));
+    let (_, model, _) = load(&text, "falling_block.toml");
+    let lowest = |s: &Snapshot| {
+        (0..model.node_count())
+            .map(|n| model.position[n][1] + s.displacement[n][1])
+            .fold(f64::INFINITY, f64::min)
+    };
+    let (lc, lg) = (lowest(c), lowest(g));
+    println!("lowest node: cpu {lc:e} m, gpu {lg:e} m");
+    // On the floor, not through it: without the wall the lowest nodes would end millimetres
+    // below it.
+    assert!(lc > -1e-9, "{lc:e}");
+    assert!(lg > -1e-9, "{lg:e}");
+}
