@@ -12,6 +12,8 @@
 //! - [`report`]: corrected velocities, u_{n+1}, the impulses' work and the interface reports;
 //! - [`one`]: on CPU adapters with a small contact set, the stage in two one-workgroup dispatches
 //!   (before and after the search) instead of eight.
+//! - [`erosion`]: in a scene with failure, the fixed candidate lists under a mask and how they
+//!   follow the elements that erode (the host, between two halves of the step that eroded them).
 //!
 //! Beside them, [`kernels`] holds the compiled kernels of every stage and their layouts,
 //! [`tables`] the contact set's static tables and [`options`] the choice of path. This file holds what the stages share: the parameters ([`ContactParams`], with the
@@ -23,6 +25,7 @@
 //! `ContactState::grow` enlarges what is needed and resumes the step. CPU reference:
 //! [`crate::contact::ContactSet::apply`].
 
+pub mod erosion;
 pub mod kernels;
 pub mod narrow;
 pub mod one;
@@ -41,7 +44,7 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use crate::contact::erosion::Masked;
-use crate::contact::{ContactSet, Tables};
+use crate::contact::ContactSet;
 use crate::error::{Error, Result};
 use crate::model::Model;
 
@@ -249,64 +252,6 @@ impl Dispatch<'_> {
     }
 }
 
-/// What a [`ContactState`] of an eroding scene keeps to follow erosion.
-#[derive(Debug)]
-struct Eroding {
-    masked: Masked,
-    model: Box<Model>,
-    slots: Vec<GpuSlot>,
-    segments: Vec<GpuSegment>,
-}
-
-/// Writes the entries of `now` that differ from `was` into `buffer` (records of `T` from offset
-/// 0), one write per run of changed entries (runs fewer than 16 entries apart merged), and keeps
-/// `now` in `was`: erosion changes a few entries of lists that hold every candidate. An empty
-/// `was` (the device's content unknown) writes all of `now`.
-fn write_changed<T: Pod + PartialEq>(
-    queue: &wgpu::Queue,
-    buffer: &wgpu::Buffer,
-    was: &mut Vec<T>,
-    now: &[T],
-) {
-    if was.len() != now.len() {
-        queue.write_buffer(buffer, 0, bytemuck::cast_slice(now));
-        *was = now.to_vec();
-        return;
-    }
-    let size = std::mem::size_of::<T>();
-    let mut k = 0;
-    while k < now.len() {
-        if now[k] == was[k] {
-            k += 1;
-            continue;
-        }
-        let start = k;
-        let mut end = k + 1;
-        let mut j = end;
-        while j < now.len() && j < end + 16 {
-            if now[j] != was[j] {
-                end = j + 1;
-            }
-            j += 1;
-        }
-        queue.write_buffer(
-            buffer,
-            (start * size) as u64,
-            bytemuck::cast_slice(&now[start..end]),
-        );
-        was[start..end].copy_from_slice(&now[start..end]);
-        k = end;
-    }
-}
-
-/// The error of eroding contact tables that cannot be built or followed (`what` of them).
-fn unfollowed(what: &str) -> Error {
-    Error::Gpu(format!(
-        "cannot {what} the eroding contact's candidate lists: a surface node or edge is not a \
-         candidate of its body"
-    ))
-}
-
 /// Workgroups of [`CG`] threads over `n` items (at least one).
 pub(crate) fn groups(n: u32) -> u32 {
     n.div_ceil(CG).max(1)
@@ -432,7 +377,7 @@ pub struct ContactState {
     one: bool,
     /// Eroding contact (a scene with failure): the fixed candidate lists, the model whose
     /// surfaces they follow, and the slots and segments as last written to the device.
-    eroding: Option<Eroding>,
+    eroding: Option<erosion::Eroding>,
 }
 
 fn make_bind(
@@ -484,12 +429,14 @@ impl ContactState {
             one,
         } = path;
         let masked = if model.has_erosion() {
-            Some(Masked::new(model, &set).ok_or_else(|| unfollowed("build"))?)
+            Some(Masked::new(model, &set).ok_or_else(|| erosion::unfollowed("build"))?)
         } else {
             None
         };
         let t = match &masked {
-            Some(m) => m.tables(&set).ok_or_else(|| unfollowed("lay out"))?,
+            Some(m) => m
+                .tables(&set)
+                .ok_or_else(|| erosion::unfollowed("lay out"))?,
             None => set.tables(),
         };
         let nl = t.nodes.len();
@@ -497,7 +444,7 @@ impl ContactState {
         let node_words = tables::node_words(&t);
         let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
         let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
-        let eroding = masked.map(|masked| Eroding {
+        let eroding = masked.map(|masked| erosion::Eroding {
             masked,
             model: Box::new(model.clone()),
             slots: slots.clone(),
@@ -649,56 +596,6 @@ impl ContactState {
             one,
             eroding,
         })
-    }
-
-    /// After a step stopped with [`STATE_ERODED`]: the surfaces follow the elements flagged in
-    /// `eroded` (per global element) on the host's copy of the set, whose slots and segments
-    /// are written into the fixed lists under their mask, and a search is marked due, so that
-    /// the resumed step searches the new surfaces. Returns the penalty springs' step now.
-    ///
-    /// # Errors
-    /// [`Error::Gpu`] when a surface node or edge is not among the candidates.
-    pub(crate) fn follow_erosion(
-        &mut self,
-        queue: &wgpu::Queue,
-        eroded: &[bool],
-    ) -> Result<Option<f64>> {
-        let Some(er) = self.eroding.as_mut() else {
-            return Err(unfollowed("follow"));
-        };
-        // As on the CPU: a set that cannot follow (never with a set built for this model)
-        // keeps its surfaces.
-        self.set.follow_erosion(&er.model, eroded);
-        let t: Tables = er
-            .masked
-            .tables(&self.set)
-            .ok_or_else(|| unfollowed("lay out"))?;
-        let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
-        let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
-        let buffer = |binding: u32| {
-            self.entries
-                .iter()
-                .find(|e| e.0 == binding)
-                .map(|e| e.1.clone())
-        };
-        if let (Some(b), false) = (buffer(7), slots.is_empty()) {
-            write_changed(queue, &b, &mut er.slots, &slots);
-        }
-        if let (Some(b), false) = (buffer(8), segs.is_empty()) {
-            write_changed(queue, &b, &mut er.segments, &segs);
-        }
-        // Counters: due = 1 (offset 0).
-        queue.write_buffer(&self.ctl, PARAMS_SIZE, bytemuck::bytes_of(&1u32));
-        Ok(self.set.penalty_step().map(|(dt, _)| dt))
-    }
-
-    /// Forgets what [`ContactState::follow_erosion`] last wrote (after a checkpoint's buffers
-    /// were restored): its next call writes the whole lists.
-    pub(crate) fn forget_written(&mut self) {
-        if let Some(er) = self.eroding.as_mut() {
-            er.slots.clear();
-            er.segments.clear();
-        }
     }
 
     /// The penalty springs' stable step and what sets it.

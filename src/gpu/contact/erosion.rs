@@ -1,0 +1,125 @@
+//! Eroding contact on the device (a scene with failure and contact): the contact state's fixed
+//! slot and segment lists hold every candidate under a mask ([`crate::contact::erosion::Masked`]),
+//! and after a step stopped with [`super::STATE_ERODED`] the host follows the erosion on its copy of the
+//! contact set (the CPU reference's [`crate::contact::ContactSet::follow_erosion`]) and writes the
+//! entries that changed (`ContactState::follow_erosion`); the search skips masked entries
+//! (`shaders/contact_search.wgsl`).
+
+use bytemuck::Pod;
+
+use super::tables::{GpuSegment, GpuSlot};
+use super::{ContactState, PARAMS_SIZE};
+use crate::contact::erosion::Masked;
+use crate::contact::Tables;
+use crate::error::{Error, Result};
+use crate::model::Model;
+
+/// What a [`ContactState`] of an eroding scene keeps to follow erosion.
+#[derive(Debug)]
+pub(super) struct Eroding {
+    pub masked: Masked,
+    pub model: Box<Model>,
+    pub slots: Vec<GpuSlot>,
+    pub segments: Vec<GpuSegment>,
+}
+
+/// Writes the entries of `now` that differ from `was` into `buffer` (records of `T` from offset
+/// 0), one write per run of changed entries (runs fewer than 16 entries apart merged), and keeps
+/// `now` in `was`: erosion changes a few entries of lists that hold every candidate. An empty
+/// `was` (the device's content unknown) writes all of `now`.
+fn write_changed<T: Pod + PartialEq>(
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    was: &mut Vec<T>,
+    now: &[T],
+) {
+    if was.len() != now.len() {
+        queue.write_buffer(buffer, 0, bytemuck::cast_slice(now));
+        *was = now.to_vec();
+        return;
+    }
+    let size = std::mem::size_of::<T>();
+    let mut k = 0;
+    while k < now.len() {
+        if now[k] == was[k] {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        let mut end = k + 1;
+        let mut j = end;
+        while j < now.len() && j < end + 16 {
+            if now[j] != was[j] {
+                end = j + 1;
+            }
+            j += 1;
+        }
+        queue.write_buffer(
+            buffer,
+            (start * size) as u64,
+            bytemuck::cast_slice(&now[start..end]),
+        );
+        was[start..end].copy_from_slice(&now[start..end]);
+        k = end;
+    }
+}
+
+/// The error of eroding contact tables that cannot be built or followed (`what` of them).
+pub(super) fn unfollowed(what: &str) -> Error {
+    Error::Gpu(format!(
+        "cannot {what} the eroding contact's candidate lists: a surface node or edge is not a \
+         candidate of its body"
+    ))
+}
+
+impl ContactState {
+    /// After a step stopped with [`super::STATE_ERODED`]: the surfaces follow the elements flagged in
+    /// `eroded` (per global element) on the host's copy of the set, whose slots and segments
+    /// are written into the fixed lists under their mask, and a search is marked due, so that
+    /// the resumed step searches the new surfaces. Returns the penalty springs' step now.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when a surface node or edge is not among the candidates.
+    pub(crate) fn follow_erosion(
+        &mut self,
+        queue: &wgpu::Queue,
+        eroded: &[bool],
+    ) -> Result<Option<f64>> {
+        let Some(er) = self.eroding.as_mut() else {
+            return Err(unfollowed("follow"));
+        };
+        // As on the CPU: a set that cannot follow (never with a set built for this model)
+        // keeps its surfaces.
+        self.set.follow_erosion(&er.model, eroded);
+        let t: Tables = er
+            .masked
+            .tables(&self.set)
+            .ok_or_else(|| unfollowed("lay out"))?;
+        let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
+        let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
+        let buffer = |binding: u32| {
+            self.entries
+                .iter()
+                .find(|e| e.0 == binding)
+                .map(|e| e.1.clone())
+        };
+        if let (Some(b), false) = (buffer(7), slots.is_empty()) {
+            write_changed(queue, &b, &mut er.slots, &slots);
+        }
+        if let (Some(b), false) = (buffer(8), segs.is_empty()) {
+            write_changed(queue, &b, &mut er.segments, &segs);
+        }
+        // Counters: due = 1 (offset 0).
+        queue.write_buffer(&self.ctl, PARAMS_SIZE, bytemuck::bytes_of(&1u32));
+        Ok(self.set.penalty_step().map(|(dt, _)| dt))
+    }
+
+    /// Forgets what [`ContactState::follow_erosion`] last wrote (after a checkpoint's buffers
+    /// were restored): its next call writes the whole lists.
+    pub(crate) fn forget_written(&mut self) {
+        if let Some(er) = self.eroding.as_mut() {
+            er.slots.clear();
+            er.segments.clear();
+        }
+    }
+}
