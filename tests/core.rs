@@ -48,7 +48,8 @@
 //!   file, or run to a whole history; nothing hangs;
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs;
 //! - [`plot`]: `ricochet plot` and `run --plots`: every picture at its size, identical bytes twice,
-//!   GIF frames, the colour of the patch test's uniform stress, refused folders and fields;
+//!   GIF frames, the colour of the patch test's uniform stress, the window around the cells
+//!   drawn, refused folders and fields;
 //! - [`restart`]: checkpoints and `run --restart` give the outputs of the run never stopped, bit
 //!   for bit, after a crash and after an interruption, with contact; bad checkpoints exit 2;
 //! - [`checkpoint_checks`]: checkpoints that are streams or huge, another run's, damaged, or
