@@ -18,7 +18,8 @@
 //!   form, the energy audit with `eroded_energy`, free nodes, the plan, the outputs;
 //! - [`erosion_contact`]: eroding contact: the masked candidate edges against the boundary of
 //!   the remaining elements, two-body, group, self-contact and wall surfaces following erosion, a
-//!   projectile perforating a plate, free nodes stopping on a wall;
+//!   projectile perforating a plate, a long rod penetrating a thick target, free nodes stopping
+//!   on a wall;
 //! - [`friction`]: Coulomb friction with Lagrange contact: a block sliding on a floor and on a
 //!   clamped block decelerates at mu g, its friction work and force;
 //! - [`gravity`]: gravity as a body force: exact free fall and its work, a block resting on a wall;
