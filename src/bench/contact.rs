@@ -1,11 +1,13 @@
 //! The contact bench (the second table): a [`ContactScene`] of a chosen size timed with and
-//! without its `[[contact]]` (and with friction when asked) on the CPU reference
+//! without its `[[contact]]` (and with friction, and with failure, when asked) on the CPU reference
 //! ([`cpu_contact`]), the GPU ([`gpu_contact`]) or both in the same rounds ([`both_contact`]).
 
 use std::path::Path;
 use std::sync::Arc;
 
-use super::scenes::{bench_schedule, build, with_friction, ContactScene, PileContact};
+use super::scenes::{
+    bench_schedule, build, with_failure, with_friction, ContactScene, PileContact,
+};
 use super::table::{solver_adapter, ContactRow};
 use super::timing::{alternate, median, per_round, stopped, timed_steps, Timed};
 use crate::error::{Error, Result};
@@ -29,6 +31,9 @@ pub struct ContactTiming {
     pub pile: PileContact,
     /// A Coulomb coefficient for a third variant with friction on every contact and wall.
     pub friction: Option<f64>,
+    /// A principal-strain limit for a variant with failure and erosion on every material
+    /// ([`with_failure`]): what eroding elements, and contact that follows them, cost a step.
+    pub failure: Option<f64>,
     /// Plain projected Gauss-Seidel sweeps instead of the extrapolated ones, on both backends
     /// ([`crate::contact::extrapolation`]): a comparison.
     pub plain_sweeps: bool,
@@ -45,6 +50,7 @@ struct Side<'a> {
     with: &'a mut dyn Timed,
     without: &'a mut dyn Timed,
     friction: Option<&'a mut dyn Timed>,
+    failure: Option<&'a mut dyn Timed>,
 }
 
 impl Side<'_> {
@@ -53,6 +59,9 @@ impl Side<'_> {
             vec![("contact", &mut *self.with), ("free", &mut *self.without)];
         if let Some(f) = self.friction.as_mut() {
             v.push(("friction", &mut **f));
+        }
+        if let Some(f) = self.failure.as_mut() {
+            v.push(("failure", &mut **f));
         }
         v
     }
@@ -93,11 +102,11 @@ fn contact_rows(
         .collect();
     // Every variant of every side, in one alternation.
     let mut runs: Vec<Box<dyn FnMut() -> Result<f64> + '_>> = Vec::new();
-    let mut counts = Vec::new();
+    let mut names = Vec::new();
     for side in &mut sides {
         let backend = side.backend;
         let variants = side.variants();
-        counts.push(variants.len());
+        names.push(variants.iter().map(|v| v.0).collect::<Vec<_>>());
         for (what, s) in variants {
             let name = format!("{backend} {} {what}", which.name());
             runs.push(Box::new(move || timed_steps(s, per, &name)));
@@ -112,15 +121,17 @@ fn contact_rows(
     let mut rows = Vec::new();
     let mut at = 0;
     for (k, side) in sides.iter().enumerate() {
-        let t = &times[at..at + counts[k]];
-        at += counts[k];
+        let t = &times[at..at + names[k].len()];
+        at += names[k].len();
         let after = side.with.count();
         let wall: f64 = t[0].iter().sum();
-        let (friction_steps_per_second, friction_us_per_step) = match t.get(2) {
-            Some(tf) => (
-                Some(total as f64 / tf.iter().sum::<f64>()),
+        // A variant's steps per second, and the median over the rounds of what it adds to a
+        // step with contact (microseconds).
+        let extra = |what: &str| match names[k].iter().position(|n| *n == what) {
+            Some(i) => (
+                Some(total as f64 / t[i].iter().sum::<f64>()),
                 Some(median(
-                    tf.iter()
+                    t[i].iter()
                         .zip(&t[0])
                         .map(|(f, c)| 1e6 * (f - c) / per as f64)
                         .collect(),
@@ -128,6 +139,8 @@ fn contact_rows(
             ),
             None => (None, None),
         };
+        let (friction_steps_per_second, friction_us_per_step) = extra("friction");
+        let (failure_steps_per_second, failure_us_per_step) = extra("failure");
         let vs_cpu = (cpu_first && k > 0)
             .then(|| median(times[0].iter().zip(&t[0]).map(|(c, g)| c / g).collect()));
         let searches = after.contact_searches - before[k].contact_searches;
@@ -154,6 +167,10 @@ fn contact_rows(
                 .friction
                 .as_ref()
                 .map(|f| f.count().contact_sweeps_mean),
+            failure: timing.failure,
+            failure_steps_per_second,
+            failure_us_per_step,
+            failure_eroded: side.failure.as_ref().map(|f| f.count().eroded_elements),
             searches,
             searches_per_100_steps: 100.0 * searches as f64 / total as f64,
             bytes_read_back_per_step: (after.bytes_read_back - before[k].bytes_read_back) as f64
@@ -164,18 +181,29 @@ fn contact_rows(
     Ok(rows)
 }
 
-/// Builds the model, plan and schedule of a contact scene variant (`friction`: the Coulomb
-/// coefficient put on its contacts and walls, see [`with_friction`]).
+/// What a contact scene variant adds to the scene: friction on its contacts and walls (a
+/// Coulomb coefficient, see [`with_friction`]) or failure on its materials (a principal-strain
+/// limit, see [`with_failure`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Variant {
+    pub friction: Option<f64>,
+    pub failure: Option<f64>,
+}
+
+/// Builds the model, plan and schedule of a contact scene variant.
 pub(super) fn contact_build(
     which: ContactScene,
     size: usize,
     contact: bool,
     pile: PileContact,
-    friction: Option<f64>,
+    variant: Variant,
 ) -> Result<(Model, Plan, crate::step::Schedule)> {
     let mut text = which.text(size, contact, pile);
-    if let Some(mu) = friction {
+    if let Some(mu) = variant.friction {
         text = with_friction(&text, mu);
+    }
+    if let Some(strain) = variant.failure {
+        text = with_failure(&text, strain);
     }
     let name = format!("bench_{}.toml", which.name());
     let scene = Scene::parse(&text, Path::new(&name))?;
@@ -183,9 +211,24 @@ pub(super) fn contact_build(
     Ok((model, plan, bench_schedule(&scene)))
 }
 
-/// The solvers of a contact scene on one backend: with and without its `[[contact]]`, and with
-/// friction when `timing.friction` asks; and the model with contact.
-type Solvers<S> = (Model, S, S, Option<S>);
+/// The solvers of a contact scene on one backend: with and without its `[[contact]]`, with
+/// friction when `timing.friction` asks and with failure when `timing.failure` asks; and the
+/// model with contact.
+type Solvers<S> = (Model, S, S, Option<S>, Option<S>);
+
+/// The variants with friction and with failure that `timing` asks for.
+fn extras(timing: &ContactTiming) -> [Option<Variant>; 2] {
+    [
+        timing.friction.map(|mu| Variant {
+            friction: Some(mu),
+            failure: None,
+        }),
+        timing.failure.map(|strain| Variant {
+            friction: None,
+            failure: Some(strain),
+        }),
+    ]
+}
 
 fn cpu_solvers(
     which: ContactScene,
@@ -200,14 +243,15 @@ fn cpu_solvers(
         }
         solver
     };
-    let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
+    let none = Variant::default();
+    let (model, plan, schedule) = contact_build(which, size, true, pile, none)?;
     let with = plain((model.clone(), plan, schedule));
-    let without = plain(contact_build(which, size, false, pile, None)?);
-    let rough = match timing.friction {
-        Some(mu) => Some(plain(contact_build(which, size, true, pile, Some(mu))?)),
-        None => None,
-    };
-    Ok((model, with, without, rough))
+    let without = plain(contact_build(which, size, false, pile, none)?);
+    let [rough, failing] = extras(timing).map(|v| {
+        v.map(|v| contact_build(which, size, true, pile, v).map(plain))
+            .transpose()
+    });
+    Ok((model, with, without, rough?, failing?))
 }
 
 fn gpu_solvers(
@@ -224,21 +268,22 @@ fn gpu_solvers(
     let solver = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
         GpuSolver::with_options(ctx.clone(), &m, &p, s, None, options)
     };
-    let (model, plan, schedule) = contact_build(which, size, true, pile, None)?;
+    let none = Variant::default();
+    let (model, plan, schedule) = contact_build(which, size, true, pile, none)?;
     let with = solver((model.clone(), plan, schedule))?;
-    let without = solver(contact_build(which, size, false, pile, None)?)?;
-    let rough = match timing.friction {
-        Some(mu) => Some(solver(contact_build(which, size, true, pile, Some(mu))?)?),
-        None => None,
-    };
-    Ok((model, with, without, rough))
+    let without = solver(contact_build(which, size, false, pile, none)?)?;
+    let [rough, failing] = extras(timing).map(|v| {
+        v.map(|v| contact_build(which, size, true, pile, v).and_then(solver))
+            .transpose()
+    });
+    Ok((model, with, without, rough?, failing?))
 }
 
 /// The model with contact of `solvers`, and the side of `backend` on `adapter` that times them.
 fn side<'a, S: Timed>(
     backend: &'static str,
     adapter: String,
-    (model, with, without, rough): &'a mut Solvers<S>,
+    (model, with, without, rough, failing): &'a mut Solvers<S>,
 ) -> (&'a Model, Side<'a>) {
     let side = Side {
         backend,
@@ -246,6 +291,7 @@ fn side<'a, S: Timed>(
         with,
         without,
         friction: rough.as_mut().map(|s| s as &mut dyn Timed),
+        failure: failing.as_mut().map(|s| s as &mut dyn Timed),
     };
     (model, side)
 }
@@ -326,6 +372,7 @@ mod tests {
             warmup: DEFAULT_WARMUP,
             pile,
             friction,
+            failure: None,
             plain_sweeps: false,
         }
     }
@@ -386,6 +433,31 @@ mod tests {
         assert!(row.friction_us_per_step.is_none());
         let table = contact_table(&[row]);
         assert!(table.contains("striker") && !table.contains("friction"));
+    }
+
+    #[test]
+    fn failure_rows_time_a_variant_with_failure_on_every_material() {
+        let text = crate::bench::with_failure(&crate::bench::striker_text(4, true), 0.03);
+        assert_eq!(
+            text.matches("failure = { principal_strain = 0.03 }\n")
+                .count(),
+            1,
+            "the one steel"
+        );
+        assert_eq!(text.matches("erosion = { inverted = true }\n").count(), 1);
+        let scene = Scene::parse(&text, Path::new("striker.toml")).expect("parses");
+        assert!(scene.run.erode_inverted);
+        let timing = ContactTiming {
+            failure: Some(0.03),
+            ..timing(4, 2, PileContact::All, Some(0.3))
+        };
+        let row = cpu_contact(ContactScene::Striker, 4, &timing).expect("row");
+        assert_eq!((row.failure, row.friction), (Some(0.03), Some(0.3)));
+        assert!(row.failure_steps_per_second.is_some_and(|f| f > 0.0));
+        assert!(row.failure_us_per_step.is_some_and(f64::is_finite));
+        assert!(row.failure_eroded.is_some());
+        let table = contact_table(&[row]);
+        assert!(table.contains("failure [us/st]") && table.contains("friction [us/st]"));
     }
 
     #[test]

@@ -34,8 +34,8 @@ pub use probe::{probe, probe_summary, ProbeReport};
 pub use profile::{no_timestamps, profile, profile_table, ProfileReport, ProfileRow, ProfileScene};
 pub use scenes::{
     bench_schedule, block_text, contact_scene, contact_text, disk_elements, pile_scene, pile_text,
-    scene, striker_scene, striker_text, with_friction, ContactScene, PileContact, PILE_DISK_CELLS,
-    PILE_RADIUS, PILE_VELOCITY, STRIKER_SIDE, STRIKER_VELOCITY,
+    scene, striker_scene, striker_text, with_failure, with_friction, ContactScene, PileContact,
+    FAILURE_STRAIN, PILE_DISK_CELLS, PILE_RADIUS, PILE_VELOCITY, STRIKER_SIDE, STRIKER_VELOCITY,
 };
 pub use table::{contact_table, summary, table, BenchRow, ContactRow};
 pub use timing::DEFAULT_ROUNDS;

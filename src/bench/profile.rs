@@ -118,7 +118,9 @@ pub fn profile(
             let (m, p) = build(&s)?;
             (m, p, crate::run::schedule(&s))
         }
-        ProfileScene::Contact(c) => contact_build(c, size, true, PileContact::All, None)?,
+        ProfileScene::Contact(c) => {
+            contact_build(c, size, true, PileContact::All, Default::default())?
+        }
     };
     let mut solver = GpuSolver::new(ctx.clone(), &model, &plan, schedule)?;
     solver.run_steps(warmup.max(2))?;

@@ -1,7 +1,8 @@
 //! The bench's generated scenes: the block of the throughput table and, for the contact table,
 //! the block pressed into its base ([`ContactScene::Pair`]), a striker into a plate and a pile of
 //! disks on a wall, as scene text (the committed `assets/bench/*.toml` are their output) and
-//! parsed; [`with_friction`] for the contact table's variant with friction.
+//! parsed; [`with_friction`] and [`with_failure`] for the contact table's variants with friction
+//! and with failure.
 
 use std::path::Path;
 
@@ -368,6 +369,35 @@ pub fn with_friction(text: &str, mu: f64) -> String {
         s.push('\n');
         if matches!(line.trim(), "[[contact]]" | "[[rigid_wall]]") {
             s.push_str(&format!("friction = {mu:?}\n"));
+        }
+    }
+    s
+}
+
+/// Principal-strain limit of the contact table's variant with failure when `--failure` gives
+/// none: in the striker at 10^4 elements the first elements erode within 60 steps of the start
+/// and about 1.3 a step erode over the first 500 (CPU reference, 2026-11-28).
+pub const FAILURE_STRAIN: f64 = 0.03;
+
+/// `text` with `failure = { principal_strain = strain }` in every `[[material]]` (under its
+/// `model` line) and `erosion = { inverted = true }` in `[run]`: every body's elements erode at
+/// that largest principal strain, and an element about to invert erodes instead of stopping the
+/// run, so that a bench scene erodes steadily while it is timed.
+pub fn with_failure(text: &str, strain: f64) -> String {
+    let mut s = String::with_capacity(text.len() + 128);
+    let mut material = false;
+    for line in text.lines() {
+        s.push_str(line);
+        s.push('\n');
+        let t = line.trim();
+        if t.starts_with("[[") || t.starts_with('[') {
+            material = t == "[[material]]";
+        }
+        if t == "[run]" {
+            s.push_str("erosion = { inverted = true }\n");
+        }
+        if material && t.starts_with("model =") {
+            s.push_str(&format!("failure = {{ principal_strain = {strain:?} }}\n"));
         }
     }
     s

@@ -184,6 +184,17 @@ pub struct ContactRow {
     pub sweeps_mean: f64,
     /// With `--friction`: the same for the variant with friction.
     pub friction_sweeps_mean: Option<f64>,
+    /// With `--failure`: the principal-strain limit of the variant with failure (every
+    /// material erodes at it, and elements about to invert erode), else `None`.
+    pub failure: Option<f64>,
+    /// With `--failure`: steps per second of the variant with failure.
+    pub failure_steps_per_second: Option<f64>,
+    /// With `--failure`: median over the rounds of (with failure - with) / steps, in
+    /// microseconds: what eroding elements (and the contact surfaces that follow them) add to a
+    /// contact step.
+    pub failure_us_per_step: Option<f64>,
+    /// With `--failure`: elements the variant with failure eroded by the end of its timed steps.
+    pub failure_eroded: Option<u64>,
     /// Broad-phase searches during the timed steps with contact.
     pub searches: u64,
     /// Searches per 100 timed steps.
@@ -198,10 +209,13 @@ pub struct ContactRow {
 }
 
 /// Formats contact rows as a table.
-/// With `--friction`, two more columns: the steps per second with friction and what friction
-/// adds to a step (microseconds); with `--plain-sweeps`, a line saying so under it.
+/// With `--friction`, three more columns: the steps per second with friction, what friction
+/// adds to a step (microseconds) and its sweeps; with `--failure`, three more: the steps per
+/// second with failure, what it adds to a step and the elements eroded; with `--plain-sweeps`,
+/// a line saying so under it.
 pub fn contact_table(rows: &[ContactRow]) -> String {
     let rough = rows.iter().any(|r| r.friction.is_some());
+    let failing = rows.iter().any(|r| r.failure.is_some());
     let mut s = format!(
         "{:<8} {:<7} {:>9} {:>6} {:>7} {:>10} {:>8} {:>15} {:>16}",
         "scene",
@@ -223,6 +237,12 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
         s.push_str(&format!(
             " {:>16} {:>18} {:>15}",
             "friction steps/s", "friction [us/st]", "friction sweeps"
+        ));
+    }
+    if failing {
+        s.push_str(&format!(
+            " {:>15} {:>17} {:>7}",
+            "failure steps/s", "failure [us/st]", "eroded"
         ));
     }
     s.push('\n');
@@ -256,6 +276,18 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
                     s.push_str(&format!(" {f:>16.1} {us:>18.2} {sw:>15.1}"))
                 }
                 _ => s.push_str(&format!(" {:>16} {:>18} {:>15}", "-", "-", "-")),
+            }
+        }
+        if failing {
+            match (
+                r.failure_steps_per_second,
+                r.failure_us_per_step,
+                r.failure_eroded,
+            ) {
+                (Some(f), Some(us), Some(n)) => {
+                    s.push_str(&format!(" {f:>15.1} {us:>17.2} {n:>7}"))
+                }
+                _ => s.push_str(&format!(" {:>15} {:>17} {:>7}", "-", "-", "-")),
             }
         }
         s.push('\n');

@@ -132,6 +132,12 @@ pub struct BenchArgs {
     /// (a third variant in the same rounds): what friction adds to a contact step.
     #[arg(long)]
     pub friction: Option<f64>,
+    /// Also time each contact scene with failure on every material (a variant in the same
+    /// rounds): its elements erode at this largest principal strain (0.03 if none is given;
+    /// elements about to invert erode too), and its contact follows the erosion: what erosion
+    /// costs a contact step.
+    #[arg(long, num_args = 0..=1, default_missing_value = "0.03")]
+    pub failure: Option<f64>,
     /// Steps timed per size.
     #[arg(long, default_value_t = 200)]
     pub steps: u64,

@@ -51,6 +51,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         elements,
         pile_pairs,
         friction,
+        failure,
         steps,
         rounds,
         warmup,
@@ -83,6 +84,9 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         .collect();
     if let Some(mu) = friction.filter(|mu| !(mu.is_finite() && *mu > 0.0)) {
         anyhow::bail!("--friction {mu}: must be a finite positive Coulomb coefficient");
+    }
+    if let Some(e) = failure.filter(|e| !(e.is_finite() && *e > 0.0)) {
+        anyhow::bail!("--failure {e}: must be a finite positive principal strain");
     }
     if block && cells.contains(&0) {
         anyhow::bail!("--cells must be positive");
@@ -140,6 +144,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
             PileContact::All
         },
         friction,
+        failure,
         plain_sweeps,
     };
     let contact_rows = contact_rows(&contact_scenes, &elements, &timing, run_cpu, ctx.as_ref());

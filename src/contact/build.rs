@@ -30,6 +30,14 @@ fn element_area(model: &Model, e: u32) -> f64 {
     quad_geometry(&model.corners[e as usize]).area
 }
 
+/// The surfaces an erosion rebuild reuses ([`rebuild`]): per body its candidate edges and its
+/// surface as meshed, once computed (they depend only on the mesh).
+#[derive(Debug, Clone, Default)]
+pub(super) struct Cache {
+    candidates: Vec<Option<EdgeCandidates>>,
+    initial: Vec<Option<Surface>>,
+}
+
 /// Surfaces and local node numbering while the set is built.
 struct Builder<'m> {
     model: &'m Model,
@@ -530,6 +538,7 @@ impl ContactSet {
             by_slave: Vec::new(),
             pairs: Vec::new(),
             mark: Vec::new(),
+            surfaces: Cache::default(),
         };
         set.penalty_step = set.compute_penalty_step();
         Some(set)
@@ -539,12 +548,23 @@ impl ContactSet {
 /// The passes and walls of `model` on the surfaces left where `eroded` (per global element) have
 /// eroded, in the local numbering `nodes` of the first build ([`ContactSet::new`], which holds
 /// every node of an erodible body); `None` if they need a node outside it.
+/// `cache` keeps the bodies' candidate edges and initial surfaces from one rebuild to the next.
 pub(super) fn rebuild(
     model: &Model,
     eroded: &[bool],
     nodes: &[u32],
+    cache: &mut Cache,
 ) -> Option<(Vec<Pass>, Vec<Wall>)> {
-    build_on(Builder::new(model, eroded), nodes)
+    let mut bld = Builder::new(model, eroded);
+    let nb = model.bodies.len();
+    if cache.candidates.len() == nb && cache.initial.len() == nb {
+        bld.candidates = std::mem::take(&mut cache.candidates);
+        bld.initial = std::mem::take(&mut cache.initial);
+    }
+    let (out, bld) = build_kept(bld, nodes);
+    cache.candidates = bld.candidates;
+    cache.initial = bld.initial;
+    out
 }
 
 /// The passes and walls of `model` with every slave node and master segment that erosion may
@@ -559,7 +579,16 @@ pub(super) fn every_candidate(model: &Model, nodes: &[u32]) -> Option<(Vec<Pass>
 }
 
 /// The passes and walls `bld` builds, in the local numbering `nodes`.
-fn build_on(mut bld: Builder<'_>, nodes: &[u32]) -> Option<(Vec<Pass>, Vec<Wall>)> {
+fn build_on(bld: Builder<'_>, nodes: &[u32]) -> Option<(Vec<Pass>, Vec<Wall>)> {
+    build_kept(bld, nodes).0
+}
+
+/// [`build_on`], giving the builder back (with the surfaces it computed).
+#[allow(clippy::type_complexity)]
+fn build_kept<'m>(
+    mut bld: Builder<'m>,
+    nodes: &[u32],
+) -> (Option<(Vec<Pass>, Vec<Wall>)>, Builder<'m>) {
     let model = bld.model;
     for (l, &g) in nodes.iter().enumerate() {
         bld.local[g as usize] = l as u32;
@@ -578,7 +607,8 @@ fn build_on(mut bld: Builder<'_>, nodes: &[u32]) -> Option<(Vec<Pass>, Vec<Wall>
         .enumerate()
         .map(|(k, w)| bld.wall(w, model.contacts.len() + k))
         .collect();
-    (bld.nodes.len() == nodes.len()).then_some((passes, walls))
+    let out = (bld.nodes.len() == nodes.len()).then_some((passes, walls));
+    (out, bld)
 }
 
 /// The nodes of a side of a contact: those of `ss` and the free nodes `free`, ascending, each

@@ -120,7 +120,9 @@ impl ContactSet {
     /// cannot follow: a surface node outside the first build's local nodes (a body that erodes
     /// but was built without failure).
     pub fn follow_erosion(&mut self, model: &Model, eroded: &[bool]) -> bool {
-        let Some((passes, walls)) = super::build::rebuild(model, eroded, &self.nodes) else {
+        let Some((passes, walls)) =
+            super::build::rebuild(model, eroded, &self.nodes, &mut self.surfaces)
+        else {
             return false;
         };
         for (old, new) in self.passes.iter_mut().zip(passes) {

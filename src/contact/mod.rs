@@ -230,6 +230,10 @@ pub struct StepWork {
 /// Contact state of a model on the CPU.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ContactSet {
+    /// What the erosion rebuilds reuse (each erodible body's candidate edges and surface as
+    /// meshed; filled at the first rebuild, not saved in checkpoints).
+    #[serde(skip)]
+    surfaces: build::Cache,
     interfaces: Vec<Interface>,
     passes: Vec<Pass>,
     walls: Vec<Wall>,

@@ -129,6 +129,7 @@ impl GpuSolver {
                 c.params = params;
                 c.counters = counters;
                 c.grows = grows;
+                c.forget_written();
             }
         }
         self.set_host_state(control, s.rows_read, s.dt_estimate, s.counters, s.finished);

@@ -237,8 +237,8 @@ fn gpu_bench_reports_the_full_over_bare_ratio_and_the_contact_share_at_a_tiny_si
 
 #[test]
 fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
-    // `--backend both`: the two backends' variants (with and without contact, and with friction)
-    // alternate in one set of rounds; the GPU row carries its speed over the CPU's, the CPU row
+    // `--backend both`: the two backends' variants (with and without contact, with friction and
+    // with failure) alternate in one set of rounds; the GPU row carries its speed over the CPU's, the CPU row
     // none. How large the ratio is belongs in BENCHMARKS.md.
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
@@ -248,6 +248,7 @@ fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
         warmup: ricochet::bench::DEFAULT_WARMUP,
         pile: ricochet::bench::PileContact::All,
         friction: Some(0.3),
+        failure: Some(ricochet::bench::FAILURE_STRAIN),
         plain_sweeps: false,
     };
     let rows =
@@ -264,6 +265,8 @@ fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
         assert_eq!((r.steps, r.rounds, r.elements, r.bodies), (8, 2, 96, 2));
         assert!(r.steps_per_second > 0.0 && r.free_seconds > 0.0);
         assert!(r.friction_steps_per_second.is_some_and(|f| f > 0.0));
+        assert!(r.failure_steps_per_second.is_some_and(|f| f > 0.0));
+        assert!(r.failure_eroded.is_some());
     }
     assert_eq!(rows[0].vs_cpu, None);
     let v = rows[1].vs_cpu.expect("the GPU row's ratio to the CPU");

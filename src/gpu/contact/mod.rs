@@ -249,6 +249,56 @@ impl Dispatch<'_> {
     }
 }
 
+/// What a [`ContactState`] of an eroding scene keeps to follow erosion.
+#[derive(Debug)]
+struct Eroding {
+    masked: Masked,
+    model: Box<Model>,
+    slots: Vec<GpuSlot>,
+    segments: Vec<GpuSegment>,
+}
+
+/// Writes the entries of `now` that differ from `was` into `buffer` (records of `T` from offset
+/// 0), one write per run of changed entries (runs fewer than 16 entries apart merged), and keeps
+/// `now` in `was`: erosion changes a few entries of lists that hold every candidate. An empty
+/// `was` (the device's content unknown) writes all of `now`.
+fn write_changed<T: Pod + PartialEq>(
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    was: &mut Vec<T>,
+    now: &[T],
+) {
+    if was.len() != now.len() {
+        queue.write_buffer(buffer, 0, bytemuck::cast_slice(now));
+        *was = now.to_vec();
+        return;
+    }
+    let size = std::mem::size_of::<T>();
+    let mut k = 0;
+    while k < now.len() {
+        if now[k] == was[k] {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        let mut end = k + 1;
+        let mut j = end;
+        while j < now.len() && j < end + 16 {
+            if now[j] != was[j] {
+                end = j + 1;
+            }
+            j += 1;
+        }
+        queue.write_buffer(
+            buffer,
+            (start * size) as u64,
+            bytemuck::cast_slice(&now[start..end]),
+        );
+        was[start..end].copy_from_slice(&now[start..end]);
+        k = end;
+    }
+}
+
 /// The error of eroding contact tables that cannot be built or followed (`what` of them).
 fn unfollowed(what: &str) -> Error {
     Error::Gpu(format!(
@@ -380,9 +430,9 @@ pub struct ContactState {
     pub grows: u32,
     /// The stage in one workgroup before the search and one after it ([`one`]).
     one: bool,
-    /// Eroding contact (a scene with failure): the fixed candidate lists and the model whose
-    /// surfaces they follow.
-    eroding: Option<(Masked, Box<Model>)>,
+    /// Eroding contact (a scene with failure): the fixed candidate lists, the model whose
+    /// surfaces they follow, and the slots and segments as last written to the device.
+    eroding: Option<Eroding>,
 }
 
 fn make_bind(
@@ -433,14 +483,13 @@ impl ContactState {
             extrapolate,
             one,
         } = path;
-        let eroding = if model.has_erosion() {
-            let masked = Masked::new(model, &set).ok_or_else(|| unfollowed("build"))?;
-            Some((masked, Box::new(model.clone())))
+        let masked = if model.has_erosion() {
+            Some(Masked::new(model, &set).ok_or_else(|| unfollowed("build"))?)
         } else {
             None
         };
-        let t = match &eroding {
-            Some((m, _)) => m.tables(&set).ok_or_else(|| unfollowed("lay out"))?,
+        let t = match &masked {
+            Some(m) => m.tables(&set).ok_or_else(|| unfollowed("lay out"))?,
             None => set.tables(),
         };
         let nl = t.nodes.len();
@@ -448,6 +497,12 @@ impl ContactState {
         let node_words = tables::node_words(&t);
         let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
         let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
+        let eroding = masked.map(|masked| Eroding {
+            masked,
+            model: Box::new(model.clone()),
+            slots: slots.clone(),
+            segments: segs.clone(),
+        });
         let names = set.names();
         let iface = tables::interface_starts(&t, names.len())?;
         let ni = names.len() as u32;
@@ -608,28 +663,42 @@ impl ContactState {
         queue: &wgpu::Queue,
         eroded: &[bool],
     ) -> Result<Option<f64>> {
-        let Some((masked, model)) = &self.eroding else {
+        let Some(er) = self.eroding.as_mut() else {
             return Err(unfollowed("follow"));
         };
         // As on the CPU: a set that cannot follow (never with a set built for this model)
         // keeps its surfaces.
-        self.set.follow_erosion(model, eroded);
-        let t: Tables = masked
+        self.set.follow_erosion(&er.model, eroded);
+        let t: Tables = er
+            .masked
             .tables(&self.set)
             .ok_or_else(|| unfollowed("lay out"))?;
         let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
         let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
-        for (binding, bytes) in [
-            (7, bytemuck::cast_slice::<GpuSlot, u8>(&slots)),
-            (8, bytemuck::cast_slice::<GpuSegment, u8>(&segs)),
-        ] {
-            if let (Some(b), false) = (self.binding(binding), bytes.is_empty()) {
-                queue.write_buffer(b, 0, bytes);
-            }
+        let buffer = |binding: u32| {
+            self.entries
+                .iter()
+                .find(|e| e.0 == binding)
+                .map(|e| e.1.clone())
+        };
+        if let (Some(b), false) = (buffer(7), slots.is_empty()) {
+            write_changed(queue, &b, &mut er.slots, &slots);
+        }
+        if let (Some(b), false) = (buffer(8), segs.is_empty()) {
+            write_changed(queue, &b, &mut er.segments, &segs);
         }
         // Counters: due = 1 (offset 0).
         queue.write_buffer(&self.ctl, PARAMS_SIZE, bytemuck::bytes_of(&1u32));
         Ok(self.set.penalty_step().map(|(dt, _)| dt))
+    }
+
+    /// Forgets what [`ContactState::follow_erosion`] last wrote (after a checkpoint's buffers
+    /// were restored): its next call writes the whole lists.
+    pub(crate) fn forget_written(&mut self) {
+        if let Some(er) = self.eroding.as_mut() {
+            er.slots.clear();
+            er.segments.clear();
+        }
     }
 
     /// The penalty springs' stable step and what sets it.

@@ -466,6 +466,7 @@ impl GpuSolver {
         let bytes = self.read_copies("erosion_readback", &[(&buf, 0, 16 * ne)])?;
         let f: &[f32] = bytemuck::cast_slice(&bytes);
         let eroded: Vec<bool> = (0..ne as usize).map(|e| f[4 * e + 1] != 0.0).collect();
+        self.counters.eroded_elements = eroded.iter().filter(|&&e| e).count() as u64;
         let queue = &self.ctx.queue;
         let Some(c) = self.state.contact.as_mut() else {
             return Err(Error::Gpu("erosion stop without contact buffers".into()));
@@ -536,7 +537,7 @@ impl GpuSolver {
             if done >= steps {
                 break;
             }
-            let n = (steps - done).min(batch as u64) as u32;
+            let n = (steps - done).min(batch.min(self.erosion_cap) as u64) as u32;
             submit(self, n)?;
             self.read(&mut events)?;
             events.clear();
