@@ -18,7 +18,8 @@
 //!   form, the energy audit with `eroded_energy`, free nodes, the plan, the outputs;
 //! - [`erosion_contact`]: eroding contact: the masked candidate edges against the boundary of
 //!   the remaining elements, two-body, group, self-contact and wall surfaces following erosion, a
-//!   projectile perforating a plate, free nodes stopping on a wall;
+//!   projectile perforating a plate, a long rod penetrating a thick target, free nodes stopping
+//!   on a wall;
 //! - [`friction`]: Coulomb friction with Lagrange contact: a block sliding on a floor and on a
 //!   clamped block decelerates at mu g, its friction work and force;
 //! - [`gravity`]: gravity as a body force: exact free fall and its work, a block resting on a wall;
@@ -48,7 +49,8 @@
 //!   file, or run to a whole history; nothing hangs;
 //! - [`outputs`]: `history.csv`, `summary.json`, VTU fields (read back with meshio), unstable runs;
 //! - [`plot`]: `ricochet plot` and `run --plots`: every picture at its size, identical bytes twice,
-//!   GIF frames, the colour of the patch test's uniform stress, refused folders and fields;
+//!   GIF frames, the colour of the patch test's uniform stress, the window around the cells
+//!   drawn, refused folders and fields;
 //! - [`restart`]: checkpoints and `run --restart` give the outputs of the run never stopped, bit
 //!   for bit, after a crash and after an interruption, with contact; bad checkpoints exit 2;
 //! - [`checkpoint_checks`]: checkpoints that are streams or huge, another run's, damaged, or

@@ -413,14 +413,37 @@ pub fn plot(dir: &Path, opts: &PlotOptions) -> Result<PlotReport> {
         f64::INFINITY,
         f64::NEG_INFINITY,
     );
-    for p in pieces.iter().flatten().flat_map(|p| p.points.iter()) {
-        if p[0].is_finite() && p[1].is_finite() {
-            bbox = (
-                bbox.0.min(p[0]),
-                bbox.1.max(p[0]),
-                bbox.2.min(p[1]),
-                bbox.3.max(p[1]),
-            );
+    // The window frames the cells drawn: not the free nodes of eroded cells, which fly on as
+    // masses with no element (assets/long_rod_penetration.toml's flew 0.54 m off, 2026-11-28);
+    // every point where no cell is left to draw.
+    let drawn = |p: &Piece| -> Vec<usize> {
+        let gone = field::eroded_cells(p);
+        let mut points: Vec<usize> = (0..p.cells())
+            .filter(|&c| gone.get(c) != Some(&true))
+            .flat_map(|c| p.cell(c).iter().map(|&i| i as usize))
+            .collect();
+        points.sort_unstable();
+        points.dedup();
+        points
+    };
+    let mut framed: Vec<Vec<usize>> = pieces.iter().flatten().map(drawn).collect();
+    if framed.iter().all(|f| f.is_empty()) {
+        framed = pieces
+            .iter()
+            .flatten()
+            .map(|p| (0..p.points.len()).collect())
+            .collect();
+    }
+    for (p, f) in pieces.iter().flatten().zip(&framed) {
+        for q in f.iter().filter_map(|&i| p.points.get(i)) {
+            if q[0].is_finite() && q[1].is_finite() {
+                bbox = (
+                    bbox.0.min(q[0]),
+                    bbox.1.max(q[0]),
+                    bbox.2.min(q[1]),
+                    bbox.3.max(q[1]),
+                );
+            }
         }
     }
     let window = Window::around(bbox);

@@ -1,8 +1,9 @@
 //! `ricochet plot` and `run --plots`: the pictures of a run from its output folder. Every file
 //! exists at its stated size, the same run plotted twice gives the same bytes, a GIF has one frame
 //! per chosen snapshot, the colours of a uniform field are the colour map's value of the exact
-//! stress (contact patch test), and folders that are not a run's output, or fields a run did not
-//! write, are refused with exit status 2.
+//! stress (contact patch test), the window frames the cells drawn (not the free nodes of eroded
+//! ones), and folders that are not a run's output, or fields a run did not write, are refused
+//! with exit status 2.
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -299,6 +300,69 @@ fn plastic_strain_draws_a_body_whose_material_does_not_write_it_in_grey() {
     println!("{grey} grey pixels");
     assert!(grey > 10_000, "{grey} grey pixels");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_window_frames_the_cells_drawn_not_the_free_nodes_of_eroded_ones() {
+    // A block stretched until every element erodes: its nodes fly on as free masses beside an
+    // elastic witness block 80 mm away, the only cells left to draw at the end.
+    let text = r#"
+[run]
+end_time = 3.0e-5
+history_interval = 1.0e-6
+field_interval = 1.0e-5
+
+[[material]]
+name = "aluminium"
+model = "j2_plastic"
+density = 2700.0
+youngs_modulus = 7.0e10
+poisson_ratio = 0.33
+yield_stress = 2.0e7
+hardening_modulus = 2.0e8
+failure = { plastic_strain = 1.0e-4 }
+
+[[material]]
+name = "steel"
+model = "linear_elastic"
+density = 7850.0
+youngs_modulus = 2.0e11
+poisson_ratio = 0.3
+
+[[body]]
+name = "block"
+material = "aluminium"
+mesh = { rectangle = { origin = [0.0, 0.0], size = [0.02, 0.04], cells = [4, 8] } }
+velocity_gradient = [[0.0, 0.0], [0.0, 2000.0]]
+
+[[body]]
+name = "witness"
+material = "steel"
+mesh = { rectangle = { origin = [0.1, 0.0], size = [0.01, 0.01], cells = [2, 2] } }
+"#;
+    let (scene, model, plan) = build(text);
+    let out = tmp_dir("plot-free-nodes");
+    let mut solver = ricochet::step::cpu::CpuSolver::new(
+        model.clone(),
+        plan.clone(),
+        ricochet::run::schedule(&scene),
+    );
+    let r = ricochet::run::run(&scene, &model, &plan, &mut solver, &out, None).expect("run");
+    assert_eq!(r.summary.status, "completed");
+    assert!(solver.eroded()[..32].iter().all(|&e| e), "the block eroded");
+    let report = plot(
+        &out,
+        &PlotOptions {
+            times: vec![3.0e-5],
+            ..PlotOptions::default()
+        },
+    )
+    .expect("plot");
+    let window = report.window.expect("window");
+    // The witness's 10 mm and a border, not the block's free nodes at x <= 20 mm.
+    println!("window x {:?}, y {:?}", window.x, window.y);
+    assert!(window.x.0 > 0.09 && window.x.1 < 0.12, "{:?}", window.x);
+    let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]
