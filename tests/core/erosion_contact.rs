@@ -19,8 +19,8 @@ use ricochet::step::{Event, Sample, Solver};
 use crate::common::*;
 
 #[path = "../shared/perforation.rs"]
-mod perforation;
-use perforation::{deepest_in_remaining, deepest_of_in, perforation, FALLING_BLOCK, MATERIALS};
+pub(crate) mod perforation;
+use perforation::{deepest_in_remaining, deepest_of_in, falling_block, perforation, MATERIALS};
 
 /// A deterministic pattern of eroded elements: each with probability `p` (a linear congruential
 /// generator seeded with `seed`).
@@ -426,7 +426,7 @@ fn assert_perforates(label: &str, text: &str, own: bool) {
 
 #[test]
 fn free_nodes_of_eroded_elements_stop_on_a_rigid_wall() {
-    let text = FALLING_BLOCK;
+    let text = &falling_block("");
     let (solver, _) = run_samples(text);
     assert!(solver.eroded().iter().all(|&e| e));
     let model = solver.model();

@@ -14,6 +14,7 @@ use ricochet::plot::{charts, field, plot, PlotOptions};
 
 use crate::common::*;
 
+use crate::erosion_contact::perforation::stretched_block;
 use crate::patch_contact::patch_scene;
 
 /// Decodes a PNG: (width, height, RGB bytes).
@@ -306,40 +307,16 @@ fn plastic_strain_draws_a_body_whose_material_does_not_write_it_in_grey() {
 fn the_window_frames_the_cells_drawn_not_the_free_nodes_of_eroded_ones() {
     // A block stretched until every element erodes: its nodes fly on as free masses beside an
     // elastic witness block 80 mm away, the only cells left to draw at the end.
-    let text = r#"
-[run]
-end_time = 3.0e-5
-history_interval = 1.0e-6
-field_interval = 1.0e-5
-
-[[material]]
-name = "aluminium"
-model = "j2_plastic"
-density = 2700.0
-youngs_modulus = 7.0e10
-poisson_ratio = 0.33
-yield_stress = 2.0e7
-hardening_modulus = 2.0e8
-failure = { plastic_strain = 1.0e-4 }
-
-[[material]]
-name = "steel"
-model = "linear_elastic"
-density = 7850.0
-youngs_modulus = 2.0e11
-poisson_ratio = 0.3
-
-[[body]]
-name = "block"
-material = "aluminium"
-mesh = { rectangle = { origin = [0.0, 0.0], size = [0.02, 0.04], cells = [4, 8] } }
-velocity_gradient = [[0.0, 0.0], [0.0, 2000.0]]
-
-[[body]]
-name = "witness"
-material = "steel"
-mesh = { rectangle = { origin = [0.1, 0.0], size = [0.01, 0.01], cells = [2, 2] } }
-"#;
+    let text = &stretched_block(
+        3.0e-5,
+        0.0,
+        "field_interval = 1.0e-5\n",
+        "",
+        "[[material]]\nname = \"steel\"\nmodel = \"linear_elastic\"\ndensity = 7850.0\n\
+         youngs_modulus = 2.0e11\npoisson_ratio = 0.3\n\n\
+         [[body]]\nname = \"witness\"\nmaterial = \"steel\"\n\
+         mesh = { rectangle = { origin = [0.1, 0.0], size = [0.01, 0.01], cells = [2, 2] } }\n",
+    );
     let (scene, model, plan) = build(text);
     let out = tmp_dir("plot-free-nodes");
     let mut solver = ricochet::step::cpu::CpuSolver::new(

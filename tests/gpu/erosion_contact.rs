@@ -15,7 +15,7 @@ use crate::failure::run_to_end;
 
 #[path = "../shared/perforation.rs"]
 mod perforation;
-use perforation::{deepest_in_remaining, perforation, FALLING_BLOCK};
+use perforation::{deepest_in_remaining, falling_block, perforation};
 
 /// The samples and snapshots of a run of `text` on the CPU reference, and of two runs on the
 /// GPU of `ctx`.
@@ -110,7 +110,7 @@ fn gpu_perforation_follows_erosion_as_the_cpu_does_and_repeats_bit_for_bit() {
 fn gpu_free_nodes_of_eroded_elements_stop_on_a_rigid_wall_as_on_the_cpu() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let text = FALLING_BLOCK.replace("[run]\n", "[run]\nfield_interval = 1.0e-4\n");
+    let text = falling_block("field_interval = 1.0e-4\n");
     let ((_, csnap), [(gs, gsnap), (gs2, gsnap2)]) = both_backends(&ctx, &text);
     assert_eq!(gs, gs2);
     assert_eq!(gsnap, gsnap2);

@@ -142,14 +142,16 @@ pub fn deepest_of_in(model: &Model, u: &[[f64; 2]], eroded: &[bool], a: usize, b
     worst
 }
 
-/// The stretched block of `tests/core/failure.rs` falling onto a floor (a Lagrange rigid wall):
-/// every element erodes within 2e-5 s, and every node then falls on as a free mass until the
-/// wall stops it (without the wall the lowest nodes would end millimetres below it).
-pub const FALLING_BLOCK: &str = r#"
+/// The stretched block of `tests/core/failure.rs` (4 x 8 aluminium elements, 20 x 40 mm, from
+/// y = `y0`, stretched along y at 2000 /s) whose every element erodes within about 2e-5 s, run to
+/// `end_time`: `run` adds lines to `[run]`, `body` to the block's table, and `tail` follows it.
+pub fn stretched_block(end_time: f64, y0: f64, run: &str, body: &str, tail: &str) -> String {
+    format!(
+        r#"
 [run]
-end_time = 1.0e-4
+end_time = {end_time:e}
 history_interval = 1.0e-6
-
+{run}
 [[material]]
 name = "aluminium"
 model = "j2_plastic"
@@ -158,18 +160,27 @@ youngs_modulus = 7.0e10
 poisson_ratio = 0.33
 yield_stress = 2.0e7
 hardening_modulus = 2.0e8
-failure = { plastic_strain = 1.0e-4 }
+failure = {{ plastic_strain = 1.0e-4 }}
 
 [[body]]
 name = "block"
 material = "aluminium"
-mesh = { rectangle = { origin = [0.0, 0.001], size = [0.02, 0.04], cells = [4, 8] } }
+mesh = {{ rectangle = {{ origin = [0.0, {y0:e}], size = [0.02, 0.04], cells = [4, 8] }} }}
 velocity_gradient = [[0.0, 0.0], [0.0, 2000.0]]
-initial_velocity = [0.0, -100.0]
+{body}
+{tail}"#
+    )
+}
 
-[[rigid_wall]]
-name = "floor"
-point = [0.0, 0.0]
-normal = [0.0, 1.0]
-method = "lagrange"
-"#;
+/// [`stretched_block`] falling onto a floor (a Lagrange rigid wall) at 100 m/s to 1e-4 s: every
+/// node falls on as a free mass until the wall stops it (without the wall the lowest nodes would
+/// end millimetres below it); `run` adds lines to `[run]`.
+pub fn falling_block(run: &str) -> String {
+    stretched_block(
+        1.0e-4,
+        0.001,
+        run,
+        "initial_velocity = [0.0, -100.0]\n",
+        "[[rigid_wall]]\nname = \"floor\"\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\nmethod = \"lagrange\"\n",
+    )
+}
