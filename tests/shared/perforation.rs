@@ -69,6 +69,20 @@ velocity = {{ x = 0.0, y = 0.0 }}
 /// How far `p` lies inside the convex quad or triangle `x` (counter-clockwise): the smallest
 /// distance to the lines of its sides (<= 0 outside).
 fn inside_depth(x: &[[f64; 2]; 4], p: [f64; 2]) -> f64 {
+    // Outside the element's bounding box: outside it (a quick rejection; the scans below test
+    // every node against every element).
+    let (lo, hi) = x.iter().fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), c| {
+            (
+                [lo[0].min(c[0]), lo[1].min(c[1])],
+                [hi[0].max(c[0]), hi[1].max(c[1])],
+            )
+        },
+    );
+    if p[0] <= lo[0] || p[0] >= hi[0] || p[1] <= lo[1] || p[1] >= hi[1] {
+        return 0.0;
+    }
     (0..4)
         .filter(|&a| x[a] != x[(a + 1) % 4])
         .map(|a| {
@@ -107,6 +121,10 @@ pub fn deepest_in_remaining(model: &Model, u: &[[f64; 2]], eroded: &[bool]) -> [
                     if model.quads[e].contains(&(n as u32)) {
                         continue;
                     }
+                    let depth = inside_depth(&c, x(n));
+                    if depth <= 0.0 {
+                        continue;
+                    }
                     let k = if i != j {
                         0
                     } else if is_free(model, i, n, eroded) {
@@ -114,7 +132,7 @@ pub fn deepest_in_remaining(model: &Model, u: &[[f64; 2]], eroded: &[bool]) -> [
                     } else {
                         1
                     };
-                    worst[k] = worst[k].max(inside_depth(&c, x(n)));
+                    worst[k] = worst[k].max(depth);
                 }
             }
         }
