@@ -209,6 +209,14 @@ pub fn measure(m: &Metric, r: &RunData<'_>) -> std::result::Result<f64, String> 
             f.iter().fold(0.0f64, |m, x| m.max(x.abs()))
         }
         MetricKind::BodyVelocity => last.0.body_velocity[body()?][comp],
+        MetricKind::ResidualVelocity => {
+            let b = body()?;
+            let v0 = first.0.body_velocity[b][comp];
+            if v0 == 0.0 {
+                return Err(format!("body {:?} starts at rest", m.body));
+            }
+            (last.0.body_velocity[b][comp] * v0.signum()).max(0.0)
+        }
         MetricKind::Restitution => {
             let b = body()?;
             let v0 = first.0.body_velocity[b][comp];
@@ -463,12 +471,27 @@ pub fn measure(m: &Metric, r: &RunData<'_>) -> std::result::Result<f64, String> 
     })
 }
 
-/// The error of `value` against the metric's reference: |value - reference| / scale.
-pub fn relative_error(m: &Metric, value: f64) -> f64 {
-    let scale = m.scale.unwrap_or(if m.reference != 0.0 {
-        m.reference.abs()
-    } else {
-        1.0
-    });
-    (value - m.reference).abs() / scale
+/// The metric's reference for a run's variables, and the error of `value` against it:
+/// |value - reference| / scale.
+///
+/// # Errors
+/// A message when the reference or the scale cannot be evaluated, or the scale is not > 0.
+pub fn relative_error(
+    m: &Metric,
+    value: f64,
+    vars: &BTreeMap<String, f64>,
+) -> std::result::Result<(f64, f64), String> {
+    let reference = m
+        .reference
+        .value(vars)
+        .map_err(|e| format!("reference: {e}"))?;
+    let scale = match &m.scale {
+        Some(s) => s.value(vars).map_err(|e| format!("scale: {e}"))?,
+        None if reference != 0.0 => reference.abs(),
+        None => 1.0,
+    };
+    if scale.is_nan() || scale <= 0.0 {
+        return Err(format!("scale {scale} is not > 0"));
+    }
+    Ok((reference, (value - reference).abs() / scale))
 }

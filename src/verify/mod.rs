@@ -96,11 +96,14 @@ pub struct Outcome {
     pub adapters: Vec<(String, String)>,
     /// Failures: the case, method, backend, metric, value and bound.
     pub failures: Vec<String>,
+    /// The cases left out of a `--quick` run: those with no quick ladder (`quick = []`, a case
+    /// too costly for the test suite), with their titles.
+    pub full_only: Vec<(String, String)>,
 }
 
 /// The case files of `assets/verification/`, built into the binary so that `ricochet verify` runs
 /// from any folder: (file name, text), sorted by file name.
-pub const EMBEDDED: [(&str, &str); 18] = [
+pub const EMBEDDED: [(&str, &str); 19] = [
     (
         "disk_wall_10ms.toml",
         include_str!("../../assets/verification/disk_wall_10ms.toml"),
@@ -144,6 +147,10 @@ pub const EMBEDDED: [(&str, &str); 18] = [
     (
         "patch_test.toml",
         include_str!("../../assets/verification/patch_test.toml"),
+    ),
+    (
+        "perforation_blunt.toml",
+        include_str!("../../assets/verification/perforation_blunt.toml"),
     ),
     (
         "plastic_patch.toml",
@@ -228,6 +235,17 @@ pub fn verify(opts: &Options, mut log: impl FnMut(&str)) -> Result<Outcome> {
         }
         cases.retain(|c| opts.only.contains(&c.case.name));
     }
+    let mut full_only = Vec::new();
+    if opts.quick {
+        for c in cases.iter().filter(|c| c.levels.quick.is_empty()) {
+            log(&format!(
+                "{}: not run (no quick ladder: the full ladder only, `ricochet verify --case {}`)",
+                c.case.name, c.case.name
+            ));
+            full_only.push((c.case.name.clone(), c.case.title.clone()));
+        }
+        cases.retain(|c| !c.levels.quick.is_empty());
+    }
     let ctx = if opts.gpu {
         Some(Arc::new(GpuContext::new(opts.adapter.as_deref())?))
     } else {
@@ -237,7 +255,10 @@ pub fn verify(opts: &Options, mut log: impl FnMut(&str)) -> Result<Outcome> {
         path: opts.out.clone(),
         source,
     })?;
-    let mut out = Outcome::default();
+    let mut out = Outcome {
+        full_only,
+        ..Outcome::default()
+    };
     if opts.cpu {
         out.adapters
             .push(("cpu".into(), "CPU reference (f64, 1 thread)".into()));
@@ -543,14 +564,20 @@ fn run_one(
     let failed = (r.summary.status != "completed").then(|| r.summary.message.clone());
     let mut rows = Vec::new();
     for m in case.metric.iter().filter(|m| m.applies(method)) {
-        let (value, note) = match &failed {
+        let (value, mut note) = match &failed {
             Some(msg) => (f64::NAN, format!("run failed: {msg}")),
             None => match metric::measure(m, &data) {
                 Ok(v) => (v, String::new()),
                 Err(e) => (f64::NAN, e),
             },
         };
-        let err = metric::relative_error(m, value);
+        let (reference, err) = match metric::relative_error(m, value, &vars) {
+            Ok(x) => x,
+            Err(e) => {
+                note = e;
+                (f64::NAN, f64::NAN)
+            }
+        };
         rows.push(Row {
             case: case.case.name.clone(),
             method: method.to_string(),
@@ -562,7 +589,7 @@ fn run_one(
             wall_seconds: r.summary.wall_seconds,
             energy_error: r.summary.max_energy_error,
             metric: m.name.clone(),
-            reference: m.reference,
+            reference,
             value,
             relative_error: if err.is_nan() { f64::INFINITY } else { err },
             bound: None,

@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use super::case::BoundValue;
 use super::{Options, Outcome, Row};
 use crate::error::{Error, Result};
 
@@ -105,6 +106,16 @@ pub fn write_markdown(path: &Path, out: &Outcome, opts: &Options) -> Result<()> 
          Wall time is the time loop's (no pipeline compilation, no output setup). Observed order: \
          ln(e_i-1 / e_i) / ln(size_i / size_i-1).\n"
     );
+    if !out.full_only.is_empty() {
+        let _ = writeln!(
+            s,
+            "Not run here (no quick ladder; `ricochet verify --case NAME` runs its full ladder):\n"
+        );
+        for (name, title) in &out.full_only {
+            let _ = writeln!(s, "- `{name}`: {title}");
+        }
+        s.push('\n');
+    }
     if out.failures.is_empty() {
         let _ = writeln!(s, "**All {} cases pass their bounds.**\n", out.cases.len());
     } else {
@@ -128,13 +139,16 @@ pub fn write_markdown(path: &Path, out: &Outcome, opts: &Options) -> Result<()> 
                 .bound
                 .as_ref()
                 .map_or("(reported only)".to_string(), |b| b.to_string());
+            let number = |v: &BoundValue| match v {
+                BoundValue::Number(x) => format!("{x:.6e}"),
+                BoundValue::Expr(e) => format!("`{e}`"),
+            };
             let _ = writeln!(
                 s,
-                "| {} | {:.6e} | {} | {bound} | {}{} |",
+                "| {} | {} | {} | {bound} | {}{} |",
                 m.name,
-                m.reference,
-                m.scale
-                    .map_or("reference".to_string(), |x| format!("{x:e}")),
+                number(&m.reference),
+                m.scale.as_ref().map_or("reference".to_string(), number),
                 if m.every_level {
                     "every level"
                 } else {

@@ -153,6 +153,75 @@ fn a_missed_bound_makes_verify_exit_4_and_name_the_case() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A reference and a scale given as expressions over the case's variables, the residual velocity
+/// of a projectile (the striker keeps 1.4 % of its speed: the wave solution's dispersive tail),
+/// and a case with no quick ladder, which `verify --quick` leaves out, says so and lists in the
+/// report.
+#[test]
+fn expression_references_residual_velocity_and_full_only_cases() {
+    let dir = tmp_dir("verify-expr");
+    let cases = dir.join("cases");
+    std::fs::create_dir_all(&cases).unwrap();
+    // The target leaves at 9.859 m/s at n = 20 (1.4 % below v0), the striker at 0.141 m/s.
+    let case = tiny_case(concat!(
+        "[[metric]]\nname = \"target_velocity\"\nkind = \"body_velocity\"\nbody = \"target\"\n",
+        "reference = \"v0 * (1 - 0.28 / n)\"\nscale = \"v0 / 10\"\nbound = 0.01\n\n",
+        "[[metric]]\nname = \"striker_residual\"\nkind = \"residual_velocity\"\nbody = \"striker\"\n",
+        "reference = \"0.014 * v0\"\nscale = \"v0\"\nbound = 1.0e-3\n",
+    ));
+    std::fs::write(cases.join("rods.toml"), &case).unwrap();
+    let full_only = case
+        .replace("name = \"rods\"", "name = \"rods_full\"")
+        .replace("quick = [{ n = 20 }]", "quick = []");
+    assert!(full_only.contains("quick = []"));
+    std::fs::write(cases.join("rods_full.toml"), full_only).unwrap();
+    let out = dir.join("out");
+    let o = quick_cpu_verify(&cases, &out);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{stdout}\n{stderr}");
+    assert!(
+        format!("{stdout}{stderr}").contains("rods_full: not run (no quick ladder"),
+        "{stdout}\n{stderr}"
+    );
+    let csv = std::fs::read_to_string(out.join("results.csv")).expect("results.csv");
+    let row = |metric: &str| -> Vec<String> {
+        csv.lines()
+            .find(|l| l.starts_with("rods,") && l.contains(&format!(",{metric},")))
+            .unwrap_or_else(|| panic!("{metric} in {csv}"))
+            .split(',')
+            .map(str::to_string)
+            .collect()
+    };
+    // The evaluated reference is in the CSV: 10 (1 - 0.014) = 9.86 m/s.
+    let target = row("target_velocity");
+    let reference: f64 = target[8].parse().unwrap();
+    assert!((reference - 9.86).abs() < 1e-12, "{target:?}");
+    let value: f64 = target[9].parse().unwrap();
+    assert!((value - 9.859).abs() < 1e-3, "{target:?}");
+    let striker = row("striker_residual");
+    let residual: f64 = striker[9].parse().unwrap();
+    assert!((residual - 0.1406).abs() < 1e-3, "{striker:?}");
+    assert_eq!(striker[15], "true", "{striker:?}");
+    assert!(!csv.lines().any(|l| l.starts_with("rods_full,")), "{csv}");
+    let report = std::fs::read_to_string(out.join("report.md")).expect("report");
+    assert!(report.contains("- `rods_full`: "), "{report}");
+    assert!(report.contains("`v0 * (1 - 0.28 / n)`"), "{report}");
+    // A scale that is not > 0 for a run's variables is that run's error, not a pass.
+    let bad = tiny_case(concat!(
+        "[[metric]]\nname = \"v\"\nkind = \"body_velocity\"\nbody = \"target\"\n",
+        "reference = 10.0\nscale = \"v0 - 10\"\nbound = 0.1\n",
+    ));
+    std::fs::remove_file(cases.join("rods_full.toml")).unwrap();
+    std::fs::write(cases.join("rods.toml"), bad).unwrap();
+    let o = quick_cpu_verify(&cases, &dir.join("out-bad"));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(4), "{stdout}");
+    let report = std::fs::read_to_string(dir.join("out-bad/report.md")).expect("report");
+    assert!(report.contains("scale 0 is not > 0"), "{report}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A plane-strain block [-0.5, 0.5] x [0, 0.5] pressed by p = 1e-3 E onto a frictionless rigid
 /// wall (ramped, mass damping: dynamic relaxation). Exact: uniaxial stress sigma_yy = -p, so
 /// every node on the wall carries the (nominal) contact pressure p, and the loaded zone is the
