@@ -203,9 +203,29 @@ pub fn write_markdown(path: &Path, out: &Outcome, opts: &Options) -> Result<()> 
             for l in levels {
                 let at: Vec<&&&Row> = g.iter().filter(|r| r.level == l).collect();
                 let Some(first) = at.first() else { continue };
+                // The level's other variables (a striking velocity), beside its size.
+                let ladder = if opts.quick {
+                    &case.levels.quick
+                } else {
+                    &case.levels.full
+                };
+                let others: Vec<String> = ladder
+                    .get(l)
+                    .map(|vars| {
+                        vars.iter()
+                            .filter(|(k, _)| **k != case.case.size)
+                            .map(|(k, v)| format!("{k} = {v}"))
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                let others = if others.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({})", others.join(", "))
+                };
                 let _ = write!(
                     s,
-                    "| {} | {} | {} | {:.3} | {:.1e} |",
+                    "| {}{others} | {} | {} | {:.3} | {:.1e} |",
                     first.size, first.elements, first.steps, first.wall_seconds, first.energy_error
                 );
                 for (k, m) in metrics.iter().enumerate() {
@@ -219,9 +239,19 @@ pub fn write_markdown(path: &Path, out: &Outcome, opts: &Options) -> Result<()> 
                             let ord = prev[k]
                                 .and_then(|(e0, s0)| order(e0, r.relative_error, s0, r.size))
                                 .map_or(String::new(), |p| format!("{p:.2}"));
+                            // A reference that depends on the level's variables: beside the
+                            // value.
+                            let reference = case
+                                .metric
+                                .iter()
+                                .find(|x| &x.name == m)
+                                .filter(|x| matches!(x.reference, BoundValue::Expr(_)))
+                                .map_or(String::new(), |_| {
+                                    format!(" (reference {:.4e})", r.reference)
+                                });
                             let _ = write!(
                                 s,
-                                " {:.6e} | {:.2e}{mark} | {ord} |",
+                                " {:.6e}{reference} | {:.2e}{mark} | {ord} |",
                                 r.value, r.relative_error
                             );
                             prev[k] = Some((r.relative_error, r.size));
