@@ -493,6 +493,16 @@ impl Case {
                                 invalid(&format!("metric[{k}].factor"), f.clone(), &reason)
                             })?;
                         }
+                        for (key, v) in [
+                            ("reference", Some(&m.reference)),
+                            ("scale", m.scale.as_ref()),
+                        ] {
+                            if let Some(BoundValue::Expr(e)) = v {
+                                eval(e, &vars).map_err(|reason| {
+                                    invalid(&format!("metric[{k}].{key}"), e.clone(), &reason)
+                                })?;
+                            }
+                        }
                     }
                 }
             }

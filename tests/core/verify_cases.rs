@@ -207,6 +207,20 @@ fn expression_references_residual_velocity_and_full_only_cases() {
     let report = std::fs::read_to_string(out.join("report.md")).expect("report");
     assert!(report.contains("- `rods_full`: "), "{report}");
     assert!(report.contains("`v0 * (1 - 0.28 / n)`"), "{report}");
+    // An expression over an unknown variable is refused when the file is read, naming the key.
+    let unknown = tiny_case(concat!(
+        "[[metric]]\nname = \"v\"\nkind = \"body_velocity\"\nbody = \"target\"\n",
+        "reference = \"v0 * m\"\nbound = 0.1\n",
+    ));
+    let file = dir.join("unknown.toml");
+    std::fs::write(&file, unknown).unwrap();
+    let msg = Case::read(&file).expect_err("unknown variable").to_string();
+    assert!(
+        msg.contains("unknown.toml")
+            && msg.contains("metric[0].reference")
+            && msg.contains("unknown variable `m`"),
+        "{msg}"
+    );
     // A scale that is not > 0 for a run's variables is that run's error, not a pass.
     let bad = tiny_case(concat!(
         "[[metric]]\nname = \"v\"\nkind = \"body_velocity\"\nbody = \"target\"\n",
