@@ -203,6 +203,28 @@ fn disk_on_wall_plots_are_identical_twice_and_follow_the_chosen_times() {
     }
 }
 
+/// Runs `text` on the CPU reference to the end, its outputs in a fresh folder named after
+/// `name`: the folder, the run's result and the solver at the end.
+fn run_on_cpu(
+    text: &str,
+    name: &str,
+) -> (
+    std::path::PathBuf,
+    ricochet::run::RunResult,
+    ricochet::step::cpu::CpuSolver,
+) {
+    let (scene, model, plan) = build(text);
+    let out = tmp_dir(name);
+    let mut solver = ricochet::step::cpu::CpuSolver::new(
+        model.clone(),
+        plan.clone(),
+        ricochet::run::schedule(&scene),
+    );
+    let r = ricochet::run::run(&scene, &model, &plan, &mut solver, &out, None).expect("run");
+    assert_eq!(r.summary.status, "completed");
+    (out, r, solver)
+}
+
 #[test]
 fn uniform_stress_of_the_contact_patch_test_is_drawn_in_its_colour() {
     // Two-pass Lagrange settles to sigma_yy = -p, sigma_xx = sigma_xy = 0 in every element
@@ -212,15 +234,7 @@ fn uniform_stress_of_the_contact_patch_test_is_drawn_in_its_colour() {
         "history_interval = 1.0e-3",
         "history_interval = 1.0e-3\nfield_interval = 1.0e-3",
     );
-    let (scene, model, plan) = build(&text);
-    let out = tmp_dir("plot-patch");
-    let mut solver = ricochet::step::cpu::CpuSolver::new(
-        model.clone(),
-        plan.clone(),
-        ricochet::run::schedule(&scene),
-    );
-    let r = ricochet::run::run(&scene, &model, &plan, &mut solver, &out, None).expect("run");
-    assert_eq!(r.summary.status, "completed");
+    let (out, r, _) = run_on_cpu(&text, "plot-patch");
     let report = plot(
         &out,
         &PlotOptions {
@@ -317,15 +331,7 @@ fn the_window_frames_the_cells_drawn_not_the_free_nodes_of_eroded_ones() {
          [[body]]\nname = \"witness\"\nmaterial = \"steel\"\n\
          mesh = { rectangle = { origin = [0.1, 0.0], size = [0.01, 0.01], cells = [2, 2] } }\n",
     );
-    let (scene, model, plan) = build(text);
-    let out = tmp_dir("plot-free-nodes");
-    let mut solver = ricochet::step::cpu::CpuSolver::new(
-        model.clone(),
-        plan.clone(),
-        ricochet::run::schedule(&scene),
-    );
-    let r = ricochet::run::run(&scene, &model, &plan, &mut solver, &out, None).expect("run");
-    assert_eq!(r.summary.status, "completed");
+    let (out, _, solver) = run_on_cpu(text, "plot-free-nodes");
     assert!(solver.eroded()[..32].iter().all(|&e| e), "the block eroded");
     let report = plot(
         &out,
