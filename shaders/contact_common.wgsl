@@ -38,6 +38,8 @@ const SLOT_PERTURBED: u32 = 0x200000u; // perturbed Lagrangian: the spring on th
 // that is not on its surface now; the search skips it (src/gpu/contact/erosion.rs writes the mask).
 const SLOT_OFF: u32 = 0x400000u;
 const SEGMENT_OFF: u32 = 1u;          // Segment.off
+const SEGMENT_AXIS_A: u32 = 1u;       // Segment.axis: a lies on the axis of an axisymmetric body
+const SEGMENT_AXIS_B: u32 = 2u;       // Segment.axis: b does
 
 // Grow requests (ContactCtl.grow bits).
 const GROW_CANDIDATES: u32 = 1u;
@@ -168,7 +170,7 @@ struct Segment {
     pass_id: u32,
     body: u32,
     off: u32,             // SEGMENT_OFF: a candidate edge not on its body's surface now
-    _p1: u32,
+    axis: u32,            // SEGMENT_AXIS_A | SEGMENT_AXIS_B: its ends on the axis
     _p2: u32,
 }
 

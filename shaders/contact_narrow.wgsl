@@ -27,6 +27,56 @@ fn line_gap(d: vec2<f32>, t: vec2<f32>) -> f32 {
     return 0.0;
 }
 
+// A node at d = p - a against the segment t = b - a whose ends on the axis of an axisymmetric
+// body are `axis` (SEGMENT_AXIS_A, SEGMENT_AXIS_B) (crate::contact::narrow::project): the
+// parameter clamped to [0, 1], the outward normal and the gap; not ok when the segment is
+// degenerate or the node projects outside it, except past an end on the axis, where it meets the
+// vertex of the segment and its mirror image: the parameter at that end, the normal along the
+// axis (none when the segment is parallel to it).
+struct Proj {
+    ok: bool,
+    xi: f32,
+    n: vec2<f32>,
+    gap: f32,
+    len: f32,
+}
+
+fn project(d: vec2<f32>, t: vec2<f32>, axis: u32) -> Proj {
+    var r: Proj;
+    r.ok = false;
+    let l2 = dot(t, t);
+    if (!(l2 > 0.0)) {
+        return r;
+    }
+    r.len = sqrt(l2);
+    let xi = dot(d, t) / l2;
+    let n = vec2<f32>(t.y, -t.x) / r.len;
+    if (xi < -XI_TOLERANCE || xi > 1.0 + XI_TOLERANCE) {
+        var bit = SEGMENT_AXIS_A;
+        var dm = d;
+        r.xi = 0.0;
+        if (xi > 0.0) {
+            bit = SEGMENT_AXIS_B;
+            dm = d - t;
+            r.xi = 1.0;
+        }
+        // The vertex's normal: (n + its mirror (-n.x, n.y)) normalised, none when that sum's
+        // length |2 n.y| is 1e-6 or less (crate::contact::narrow::vertex).
+        if ((axis & bit) == 0u || !(abs(2.0 * n.y) > 1e-6)) {
+            return r;
+        }
+        r.n = vec2<f32>(0.0, sign(n.y));
+        r.gap = dot(dm, r.n);
+        r.ok = true;
+        return r;
+    }
+    r.xi = clamp(xi, 0.0, 1.0);
+    r.n = n;
+    r.gap = dot(d, n);
+    r.ok = true;
+    return r;
+}
+
 // (impulse, 1 if the bound acted) (crate::contact::penalty_impulse): the spring unchanged while
 // it is soft for the step ((omega dt)^2 = k dtn w <= STIFF_SPRING), else bounded by the perfectly
 // plastic impulse.
@@ -150,17 +200,12 @@ fn slave_gap(k: u32) -> vec2<f32> {
         if (dot(own, vec2<f32>(seg_t.y, -seg_t.x)) >= 0.0) {
             continue;
         }
-        let l2 = dot(seg_t, seg_t);
-        if (!(l2 > 0.0)) {
+        let pr = project(x_n(sl.s, sg.a), seg_t, sg.axis);
+        if (!pr.ok) {
             continue;
         }
-        let d = x_n(sl.s, sg.a);
-        let xi = dot(d, seg_t) / l2;
-        if (xi < -XI_TOLERANCE || xi > 1.0 + XI_TOLERANCE) {
-            continue;
-        }
-        let len = sqrt(l2);
-        let gap = dot(d, vec2<f32>(seg_t.y, -seg_t.x) / len);
+        let gap = pr.gap;
+        let len = pr.len;
         if (gap > -0.5 * len && (best.y == 0.0 || abs(gap) < abs(best.x))) {
             best = vec2<f32>(gap, 1.0);
         }
@@ -215,17 +260,13 @@ fn qualify(s: u32, own: vec2<f32>, j: u32, penalty: bool, carried: f32) -> Qual 
         d = x_n(s, sg.a);
         t = seg_t;
     }
-    let l2 = dot(t, t);
-    if (!(l2 > 0.0)) {
+    let pr = project(d, t, sg.axis);
+    if (!pr.ok) {
         return r;
     }
-    let len = sqrt(l2);
-    let xi = dot(d, t) / l2;
-    if (xi < -XI_TOLERANCE || xi > 1.0 + XI_TOLERANCE) {
-        return r;
-    }
-    let n = vec2<f32>(t.y, -t.x) / len;
-    let gap = dot(d, n);
+    let len = pr.len;
+    let n = pr.n;
+    let gap = pr.gap;
     if (penalty) {
         // (The augmented Lagrangian's node stays in contact up to the gap carried / k.)
         var reach = 0.0;
@@ -246,7 +287,7 @@ fn qualify(s: u32, own: vec2<f32>, j: u32, penalty: bool, carried: f32) -> Qual 
         r.k1 = gap;
     }
     r.ok = true;
-    r.xi = clamp(xi, 0.0, 1.0);
+    r.xi = pr.xi;
     r.n = n;
     r.gap = gap;
     r.len = len;
@@ -353,6 +394,45 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32
         return c;
     }
     let sg = segs[best_j];
+    // Over a convex corner of the segment, outside the master body (the node came from behind
+    // the segment's line, it is on the corner's half of it, the corner turns left, and the node
+    // is on or in front of the neighbour's line, to TIE_TOLERANCE of the lengths): no contact
+    // (crate::contact::narrow::outside_convex_corner). Positions as in qualify.
+    let came_from_behind = !penalty && best.k0 < -TIE_TOLERANCE * best.len;
+    for (var q = begin; came_from_behind && q < end; q++) {
+        let s2 = segs[grow[q]];
+        var c0 = NONE;
+        var c2 = NONE;
+        var near = false;
+        if (s2.a == sg.b && s2.b != sg.a) {
+            c0 = sg.a;
+            c2 = s2.b;
+            near = best.xi >= 0.5;
+        } else if (s2.b == sg.a && s2.a != sg.b) {
+            c0 = s2.a;
+            c2 = sg.b;
+            near = best.xi <= 0.5;
+        } else {
+            continue;
+        }
+        let c1 = select(sg.a, sg.b, c2 == s2.b);
+        var t1 = x_tr(c1, c0);
+        var t2 = x_tr(c2, c1);
+        var d = x_tr(s, s2.a);
+        var t = x_tr(s2.b, s2.a);
+        if (penalty) {
+            t1 = x_n(c1, c0);
+            t2 = x_n(c2, c1);
+            d = x_n(s, s2.a);
+            t = x_n(s2.b, s2.a);
+        }
+        if (!near || !(t1.x * t2.y - t1.y * t2.x > 0.0)) {
+            continue;
+        }
+        if (line_gap(d, t) > -TIE_TOLERANCE * length(t)) {
+            return c;
+        }
+    }
     var best_xi = best.xi;
     var best_n = best.n;
     var best_gap = best.gap;

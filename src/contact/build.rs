@@ -21,6 +21,25 @@ struct Spring {
 }
 
 /// 2D bulk modulus used by the penalty stiffness: lambda (of the formulation) + mu.
+/// Whether each of the global nodes `nodes` lies on the axis of an axisymmetric body (empty when
+/// no body is axisymmetric).
+fn on_axis(model: &Model, nodes: &[u32]) -> Vec<bool> {
+    if model.bodies.iter().all(|b| b.axis_tolerance.is_none()) {
+        return Vec::new();
+    }
+    nodes
+        .iter()
+        .map(|&g| {
+            let g = g as usize;
+            let b = model.bodies.partition_point(|b| b.nodes.end <= g);
+            model
+                .bodies
+                .get(b)
+                .is_some_and(|b| b.on_axis(model.position[g]))
+        })
+        .collect()
+}
+
 fn bulk_modulus(model: &Model, body: usize) -> f64 {
     let p = &model.bodies[body].params;
     p.lambda_plane + p.mu
@@ -495,6 +514,7 @@ impl ContactSet {
             passes,
             walls,
             reference: nodes.iter().map(|&g| model.position[g as usize]).collect(),
+            axis: on_axis(model, &nodes),
             inv_mass,
             mass,
             inv_mass_scale: 1.0,

@@ -241,6 +241,10 @@ pub struct ContactSet {
     nodes: Vec<u32>,
     /// Reference (undeformed) position of each local node.
     reference: Vec<[f64; 2]>,
+    /// Whether each local node lies on the axis of an axisymmetric body (empty: none does; see
+    /// [`narrow::project`]).
+    #[serde(default)]
+    axis: Vec<bool>,
     /// Inverse mass per local node and direction (0 on a velocity-constrained direction).
     inv_mass: Vec<[f64; 2]>,
     mass: Vec<f64>,
@@ -312,6 +316,11 @@ pub struct ContactSet {
 }
 
 impl ContactSet {
+    /// Whether the local nodes `ends` lie on the axis of an axisymmetric body.
+    pub(super) fn on_axis(&self, ends: [u32; 2]) -> [bool; 2] {
+        ends.map(|n| self.axis.get(n as usize) == Some(&true))
+    }
+
     /// Names of the contacts and walls, in history-column order.
     pub fn names(&self) -> Vec<String> {
         self.interfaces.iter().map(|i| i.name.clone()).collect()

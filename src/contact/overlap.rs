@@ -34,7 +34,12 @@ impl ContactSet {
                     let j = p.candidates[k].1 as usize;
                     let [a, b] = p.segments[j];
                     let x = &self.x_n;
-                    if let Some(pr) = project(x[s as usize], x[a as usize], x[b as usize]) {
+                    if let Some(pr) = project(
+                        x[s as usize],
+                        x[a as usize],
+                        x[b as usize],
+                        self.on_axis([a, b]),
+                    ) {
                         if pr.gap < 0.0
                             && pr.gap > -0.5 * pr.length
                             && worst.is_none_or(|w| pr.gap > w.0)

@@ -62,6 +62,9 @@ pub struct SegmentTable {
     pub pass: u32,
     /// The segment's body.
     pub body: u32,
+    /// Whether a, b lie on the axis of an axisymmetric body (see
+    /// [`super::narrow::project`]).
+    pub axis: [bool; 2],
     /// A candidate edge of an eroding body that is not on its surface now (the GPU's masked
     /// tables, [`super::erosion::Masked`]); never in [`ContactSet::tables`].
     pub off: bool,
@@ -135,6 +138,7 @@ impl ContactSet {
                         stiffness,
                         pass: pi as u32,
                         body,
+                        axis: self.on_axis(nodes),
                         off: false,
                     }),
             );

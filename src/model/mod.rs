@@ -33,6 +33,18 @@ pub struct BodyModel {
     pub params: ElementParams,
     /// Total mass.
     pub mass: f64,
+    /// For an axisymmetric body, the largest |x| of a node on the axis (x = r = 0, to round-off
+    /// of the body's size): such nodes keep u_r = 0 and the edges between two of them are not
+    /// part of its surface ([`surface`]). `None` for a plane body.
+    pub axis_tolerance: Option<f64>,
+}
+
+impl BodyModel {
+    /// Whether the point `p` (reference coordinates) lies on the axis of this axisymmetric body
+    /// (never for a plane body).
+    pub fn on_axis(&self, p: [f64; 2]) -> bool {
+        self.axis_tolerance.is_some_and(|tol| p[0].abs() <= tol)
+    }
 }
 
 /// A velocity constraint on one node.
@@ -343,6 +355,7 @@ impl Model {
                 elements: e0..m.quads.len(),
                 params,
                 mass: total,
+                axis_tolerance: None,
             });
         }
         // Velocity constraints: later boundaries override earlier ones component-wise.
@@ -403,8 +416,9 @@ impl Model {
             let size = nodes.clone().fold(0.0f64, |s, n| {
                 s.max(m.position[n][0].abs()).max(m.position[n][1].abs())
             });
+            m.bodies[bi].axis_tolerance = Some(1e-12 * size);
             for n in nodes {
-                if m.position[n][0].abs() <= 1e-12 * size {
+                if m.bodies[bi].on_axis(m.position[n]) {
                     let c = cons[n].get_or_insert(NodeConstraint::free(n as u32));
                     c.vx = Some(0.0);
                     c.cx = None;

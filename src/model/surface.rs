@@ -9,6 +9,11 @@
 //! remains and the one across it does not), the form a GPU twin keeps
 //! ([`crate::contact::erosion`] says how). [`Surface::of_remaining`] is the same surface computed
 //! from scratch, against which it is tested.
+//!
+//! The edges on the axis of an axisymmetric body (both nodes at r = 0) are not part of its
+//! surface: nothing reaches them from the other side (r >= 0), and a node on the axis would find
+//! such an edge at zero distance along the one direction it cannot move (u_r = 0), so that it
+//! took no constraint from the segments beside it and could pass into the body.
 
 use super::Model;
 
@@ -50,16 +55,18 @@ impl Surface {
         self
     }
 
-    /// Extracts the surface of body `body`: the edges used by exactly one of its elements.
+    /// Extracts the surface of body `body`: the edges used by exactly one of its elements (less
+    /// those on the axis of an axisymmetric body).
     pub fn of_body(model: &Model, body: usize) -> Surface {
         Surface::of_remaining(model, body, &[])
     }
 
     /// The surface of body `body`'s elements that have not eroded (`eroded`: per global
     /// element; empty, or shorter than the elements, for none), from scratch: the edges used by
-    /// exactly one of them.
+    /// exactly one of them (less those on the axis of an axisymmetric body).
     pub fn of_remaining(model: &Model, body: usize, eroded: &[bool]) -> Surface {
         let b = &model.bodies[body];
+        let axial = |i: u32, j: u32| on_axis(model, body, [i, j]);
         let mut edges: Vec<([u32; 2], [u32; 2], u32)> = Vec::new();
         for e in b.elements.clone() {
             if eroded.get(e) == Some(&true) {
@@ -83,7 +90,7 @@ impl Surface {
             while m < edges.len() && edges[m].0 == edges[k].0 {
                 m += 1;
             }
-            if m - k == 1 {
+            if m - k == 1 && !axial(edges[k].1[0], edges[k].1[1]) {
                 segments.push(Segment {
                     nodes: edges[k].1,
                     element: edges[k].2,
@@ -113,7 +120,8 @@ pub struct EdgeCandidates {
     /// The body.
     pub body: usize,
     /// Every element edge, oriented as in its element (the element on its left), sorted by
-    /// element and nodes as [`Surface::segments`]; the collapsed side of a triangle left out.
+    /// element and nodes as [`Surface::segments`]; the collapsed side of a triangle and the
+    /// edges on the axis of an axisymmetric body (never exposed) left out.
     pub edges: Vec<Segment>,
     /// The element across each edge ([`NONE`]: none, an edge of the mesh's boundary).
     pub across: Vec<u32>,
@@ -141,7 +149,7 @@ impl EdgeCandidates {
                     seen.push(i);
                     count[i as usize - b.nodes.start + 1] += 1;
                 }
-                if i == j {
+                if i == j || on_axis(model, body, [i, j]) {
                     continue;
                 }
                 let seg = Segment {
@@ -245,6 +253,13 @@ impl EdgeCandidates {
             })
             .collect()
     }
+}
+
+/// Whether the edge between the global nodes `nodes` of body `body` lies on the axis of an
+/// axisymmetric body (both ends at r = 0).
+fn on_axis(model: &Model, body: usize, nodes: [u32; 2]) -> bool {
+    let b = &model.bodies[body];
+    nodes.iter().all(|&n| b.on_axis(model.position[n as usize]))
 }
 
 /// Reference length of a segment.

@@ -3,9 +3,11 @@
 //! without a boundary table, and the refused inputs. The thick cylinder (Lame) and the Taylor bar
 //! are verification cases (`assets/verification/`).
 
+use ricochet::model::surface::Surface;
 use ricochet::output::fields::element_fields;
 
 use crate::common::*;
+use crate::contact::scenes;
 
 const RHO: f64 = 7850.0;
 
@@ -238,4 +240,32 @@ fn check_prints_the_formulation_and_the_flow_stress() {
     );
     assert!(out.contains("-> plasticity ->"), "{out}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Contact at the axis: the edges on it are no part of a body's surface (nothing reaches them
+/// from r < 0), and a node on the axis meets a nose dimpled at the axis at its axis node
+/// (`scenes::DIMPLE`: the vertex of the nose's segment and its mirror image) instead of passing
+/// into it.
+#[test]
+fn a_node_on_the_axis_stops_at_a_nose_dimpled_at_the_axis_and_axis_edges_are_no_surface() {
+    let (r, model, u) = run_cpu_text(scenes::DIMPLE, "dimple");
+    for b in 0..model.bodies.len() {
+        let s = Surface::of_body(&model, b);
+        assert_eq!(s.segments.len(), 3, "{:?}", s.segments);
+        assert!(s
+            .segments
+            .iter()
+            .all(|g| g.nodes.iter().any(|&n| model.position[n as usize][0] > 0.0)));
+    }
+    let inside = scenes::apex_inside(&model, &u);
+    // Without the vertex the apex ended 6.8e-4 m inside the rod.
+    assert!(inside < 1e-12, "{inside:e}");
+    // It met the axis node and bounced: the tip moves away at the end, and the run balances.
+    let last = r.samples.last().expect("rows").0.clone();
+    assert!(last.body_velocity[1][1] < 0.0, "{:?}", last.body_velocity);
+    assert!(
+        r.summary.max_energy_error < 1e-3,
+        "{}",
+        r.summary.max_energy_error
+    );
 }

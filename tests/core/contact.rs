@@ -14,7 +14,7 @@ use crate::scene_text::STEEL;
 #[path = "../shared/compare.rs"]
 mod compare;
 #[path = "../shared/contact_scenes.rs"]
-mod scenes;
+pub(crate) mod scenes;
 use scenes::*;
 
 /// [`run_cpu_text`] without the displacements.
@@ -703,4 +703,22 @@ fn shipped_scenes_converge_in_every_contact_step() {
         );
         assert!(!err.contains("did not converge"), "{name}: {err}");
     }
+}
+
+/// A node passing over a convex master corner (`scenes::CORNER_PASS`): behind the line of the
+/// corner's side but in front of its top face, it is outside the master body and takes no
+/// constraint from the side; it lands on the top face.
+#[test]
+fn a_node_passing_over_a_convex_corner_is_not_thrown_off_by_the_corner_s_side() {
+    let (r, _, _) = run_cpu_text(CORNER_PASS, "corner_pass");
+    let rows: Vec<_> = r.samples.iter().map(|s| s.0.clone()).collect();
+    let (left, landed) = corner_pass(&rows);
+    // Before the rule: -492 m/s, and the run stopped on its energy balance.
+    assert!(left > -1e-9, "{left} m/s");
+    assert!(landed);
+    assert!(
+        r.summary.max_energy_error < 1e-9,
+        "{}",
+        r.summary.max_energy_error
+    );
 }

@@ -359,3 +359,113 @@ pub fn assert_penalty_step_refused(summary: &Summary) {
         summary.message
     );
 }
+
+/// The `[run]` (8 us, a history row every 0.1 us) and steel `[[material]]` tables of
+/// [`DIMPLE`] and [`CORNER_PASS`].
+macro_rules! small_steel_run {
+    () => {
+        r#"
+[run]
+end_time = 8.0e-6
+history_interval = 1.0e-7
+
+[[material]]
+name = "steel"
+model = "linear_elastic"
+density = 7850.0
+youngs_modulus = 2.0e11
+poisson_ratio = 0.3
+"#
+    };
+}
+
+/// A cone `tip` (axisymmetric, its apex on the axis) strikes at 200 m/s the held `rod`, whose nose
+/// rises from its rim (r = 1 mm) to its axis node 0.5 mm above it (a dimple); one pass, the tip's
+/// nodes the slaves. The tip's apex meets the rod's axis node 1 mm before the rims could meet, and
+/// must stop there ([`apex_inside`]). Past the end of the nose's segment it meets the vertex that
+/// the segment makes with its mirror image across the axis (`ricochet::contact::narrow::project`);
+/// without it the apex went on into the rod and ended 0.68 mm inside it (2026-11-28).
+pub const DIMPLE: &str = concat!(
+    small_steel_run!(),
+    r#"
+[[body]]
+name = "rod"
+material = "steel"
+formulation = "axisymmetric"
+mesh = { nodes = [[0.0, 5.0e-4], [1.0e-3, 0.0], [1.0e-3, 2.0e-3], [0.0, 2.0e-3]], quads = [[0, 1, 2, 3]] }
+
+[[body]]
+name = "tip"
+material = "steel"
+formulation = "axisymmetric"
+mesh = { nodes = [[0.0, -2.5e-3], [1.0e-3, -2.5e-3], [1.0e-3, -1.05e-3], [0.0, -5.0e-5]], quads = [[0, 1, 2, 3]] }
+initial_velocity = [0.0, 200.0]
+
+[[boundary]]
+body = "rod"
+region = { min = [-1.0, -1.0], max = [1.0, 1.0] }
+velocity = { x = 0.0, y = 0.0 }
+
+[[contact]]
+bodies = ["tip", "rod"]
+method = "lagrange"
+two_pass = false
+"#
+);
+
+/// How far [`DIMPLE`]'s tip apex (node 7) ended above the rod's axis node (node 0) at the
+/// displacements `u` (m; positive: inside the rod).
+pub fn apex_inside(model: &Model, u: &[[f64; 2]]) -> f64 {
+    let y = |n: usize| model.position[n][1] + u[n][1];
+    assert!(model.position[0][0] == 0.0 && model.position[7][0] == 0.0);
+    y(7) - y(0)
+}
+
+/// A block falls at 10 m/s past the apex of a held wedge (one pass, the block's nodes the slaves):
+/// its middle bottom node starts 20 um above the apex and 50 um to the right of it, inside the
+/// wedge's left side's line (the side leans out, down to the left) but above its top face, which
+/// falls away to the right at 1 in 2. The node passes the apex's level outside the wedge and
+/// lands on the top face at 4.5 us. Taken as penetrating the side (behind its line by 50 um,
+/// projecting onto it once it is below the apex), it was thrown to the left: the block's mean
+/// x velocity -492 m/s, and the run stopped on its energy balance (2026-11-28). The convex
+/// corner's rule (`ricochet::contact::narrow::outside_convex_corner`) leaves it alone.
+pub const CORNER_PASS: &str = concat!(
+    small_steel_run!(),
+    r#"
+[[body]]
+name = "wedge"
+material = "steel"
+mesh = { nodes = [[-1.0e-4, -2.0e-3], [1.0e-3, -2.0e-3], [1.0e-3, -5.0e-4], [0.0, 0.0]], quads = [[0, 1, 2, 3]] }
+
+[[body]]
+name = "block"
+material = "steel"
+mesh = { nodes = [[-9.5e-4, 2.0e-5], [5.0e-5, 2.0e-5], [1.05e-3, 2.0e-5], [-9.5e-4, 1.02e-3], [5.0e-5, 1.02e-3], [1.05e-3, 1.02e-3]], quads = [[0, 1, 4, 3], [1, 2, 5, 4]] }
+initial_velocity = [0.0, -10.0]
+
+[[boundary]]
+body = "wedge"
+region = { min = [-1.0, -1.0], max = [1.0, 1.0] }
+velocity = { x = 0.0, y = 0.0 }
+
+[[contact]]
+bodies = ["block", "wedge"]
+method = "lagrange"
+two_pass = false
+"#
+);
+
+/// [`CORNER_PASS`]'s run: the block's smallest mean x velocity over the rows (m/s; negative: thrown
+/// to the left) and whether it met the wedge's top face (a contact force along the face's normal,
+/// (1, 2) / sqrt 5, in some row).
+pub fn corner_pass(samples: &[Sample]) -> (f64, bool) {
+    let left = samples
+        .iter()
+        .map(|s| s.body_velocity[1][0])
+        .fold(f64::INFINITY, f64::min);
+    let landed = samples.iter().any(|s| {
+        let f = s.contacts[0].force;
+        f[1] > 0.0 && (f[1] - 2.0 * f[0]).abs() < 1e-3 * f[1]
+    });
+    (left, landed)
+}

@@ -60,8 +60,11 @@ pub struct GpuSegment {
     /// 1: a candidate edge of an eroding body that is not on its surface now (WGSL
     /// `SEGMENT_OFF`).
     pub off: u32,
+    /// Bit 0: a lies on the axis of an axisymmetric body, bit 1: b does (WGSL `SEGMENT_AXIS_A`,
+    /// `SEGMENT_AXIS_B`; [`crate::contact::narrow::project`]).
+    pub axis: u32,
     /// Padding to 32 bytes.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<GpuSlot>() == 64);
@@ -104,7 +107,8 @@ impl From<&SegmentTable> for GpuSegment {
             pass: s.pass,
             body: s.body,
             off: u32::from(s.off),
-            _pad: [0; 2],
+            axis: u32::from(s.axis[0]) | (u32::from(s.axis[1]) << 1),
+            _pad: 0,
         }
     }
 }
