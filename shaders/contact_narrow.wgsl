@@ -28,7 +28,7 @@ fn line_gap(d: vec2<f32>, t: vec2<f32>) -> f32 {
 }
 
 // A node at d = p - a against the segment t = b - a whose ends on the axis of an axisymmetric
-// body are `axis` (SEGMENT_AXIS_A, SEGMENT_AXIS_B) (crate::contact::narrow::project): the
+// body are `axis` (SEGMENT_AXIS_A, SEGMENT_AXIS_B) (crate::contact::rules::project): the
 // parameter clamped to [0, 1], the outward normal and the gap; not ok when the segment is
 // degenerate or the node projects outside it, except past an end on the axis, where it meets the
 // vertex of the segment and its mirror image: the parameter at that end, the normal along the
@@ -61,7 +61,7 @@ fn project(d: vec2<f32>, t: vec2<f32>, axis: u32) -> Proj {
             r.xi = 1.0;
         }
         // The vertex's normal: (n + its mirror (-n.x, n.y)) normalised, none when that sum's
-        // length |2 n.y| is 1e-6 or less (crate::contact::narrow::vertex).
+        // length |2 n.y| is 1e-6 or less (crate::contact::rules::vertex).
         if ((axis & bit) == 0u || !(abs(2.0 * n.y) > 1e-6)) {
             return r;
         }
@@ -397,7 +397,7 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32
     // Over a convex corner of the segment, outside the master body (the node came from behind
     // the segment's line, it is on the corner's half of it, the corner turns left, and the node
     // is on or in front of the neighbour's line, to TIE_TOLERANCE of the lengths): no contact
-    // (crate::contact::narrow::outside_convex_corner). Positions as in qualify.
+    // (crate::contact::rules::outside_convex_corner). Positions as in qualify.
     let came_from_behind = !penalty && best.k0 < -TIE_TOLERANCE * best.len;
     for (var q = begin; came_from_behind && q < end; q++) {
         let s2 = segs[grow[q]];
@@ -437,7 +437,7 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32
     var best_n = best.n;
     var best_gap = best.gap;
     // A tie with the neighbouring segment at a shared master node: contact with that node along
-    // its averaged normal (crate::contact::narrow::vertex).
+    // its averaged normal (crate::contact::rules::vertex).
     for (var q = begin; q < end; q++) {
         let j2 = grow[q];
         let s2 = segs[j2];

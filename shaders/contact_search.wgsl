@@ -295,7 +295,7 @@ fn seg_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
-// Whether master segment j may be paired with slot k (crate::contact::narrow::admissible, with
+// Whether master segment j may be paired with slot k (crate::contact::rules::admissible, with
 // the pass): the slot's pass; not a segment of the slave's own; another body, or self-contact
 // without the neighbouring segments and without the segments the slave lies behind in the
 // reference configuration (the far side of the same body).

@@ -9,10 +9,11 @@
 //! - [`search`] (with the `parry2d` BVH in [`broad`]): candidate (slave node, master segment)
 //!   pairs, inflated by a search margin and swept over the step; searched again only when some
 //!   contact node has moved more than half the margin since the last search.
-//! - [`narrow`]: which candidates may pair at all ([`narrow::admissible`]: other bodies, or the
+//! - [`narrow`]: which candidates may pair at all ([`rules::admissible`]: other bodies, or the
 //!   same body with self-contact away from the node's own neighbourhood and far side), each
-//!   slave node's penetrated segment (projection, selection, the corner rule), its parameter xi,
-//!   normal and gap: the step's constraints.
+//!   slave node's penetrated segment (projection, selection, the corner rules), its parameter
+//!   xi, normal and gap: the step's constraints. Its pure rules, shared with the GPU kernels,
+//!   are in [`rules`].
 //! - [`solve`]: the Lagrange correction (projected Gauss-Seidel sweeps with the diagonal mass,
 //!   warm start, active-set re-check) and the bounded penalty impulse with its stable step.
 //! - [`report`]: what the history records per `[[contact]]` table or wall.
@@ -35,6 +36,7 @@ pub mod erosion;
 pub mod narrow;
 pub mod overlap;
 pub mod report;
+pub mod rules;
 pub mod search;
 pub mod solve;
 pub mod tables;
@@ -242,7 +244,7 @@ pub struct ContactSet {
     /// Reference (undeformed) position of each local node.
     reference: Vec<[f64; 2]>,
     /// Whether each local node lies on the axis of an axisymmetric body (empty: none does; see
-    /// [`narrow::project`]).
+    /// [`rules::project`]).
     #[serde(default)]
     axis: Vec<bool>,
     /// Inverse mass per local node and direction (0 on a velocity-constrained direction).

@@ -2,7 +2,7 @@
 //! it in the reference configuration (so without strain, and so without energy) before the run;
 //! overlaps deeper than half a contact segment are refused.
 
-use super::narrow::project;
+use super::rules::project;
 use super::{broad, ContactSet};
 use crate::error::Result;
 use crate::geometry::{element_centre, min_corner_ratio, quad_geometry};

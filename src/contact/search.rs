@@ -1,7 +1,7 @@
 //! Search: when a new broad-phase search is due, and the search itself (the `parry2d` BVH of
-//! [`super::broad`] per pass, its candidates filtered by [`super::narrow::admissible`]).
+//! [`super::broad`] per pass, its candidates filtered by [`super::rules::admissible`]).
 
-use super::narrow::admissible;
+use super::rules::admissible;
 use super::{broad, dist2, ContactSet};
 
 impl ContactSet {

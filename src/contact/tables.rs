@@ -44,7 +44,7 @@ pub struct SlotTable {
     /// The pass is a group: the impulse's sign on the interface's first body follows the body
     /// order (+1 when this slot's body is below the segment's, -1 above, 0 equal).
     pub group: bool,
-    /// The pass admits self-contact (see [`super::narrow::admissible`]).
+    /// The pass admits self-contact (see [`super::rules::admissible`]).
     pub self_contact: bool,
     /// A candidate node of an eroding body that is not a slave now (the GPU's masked tables,
     /// [`super::erosion::Masked`]); never in [`ContactSet::tables`].
@@ -63,7 +63,7 @@ pub struct SegmentTable {
     /// The segment's body.
     pub body: u32,
     /// Whether a, b lie on the axis of an axisymmetric body (see
-    /// [`super::narrow::project`]).
+    /// [`super::rules::project`]).
     pub axis: [bool; 2],
     /// A candidate edge of an eroding body that is not on its surface now (the GPU's masked
     /// tables, [`super::erosion::Masked`]); never in [`ContactSet::tables`].
@@ -79,7 +79,7 @@ pub struct Tables {
     pub inv_mass: Vec<[f64; 2]>,
     /// Mass per local node.
     pub mass: Vec<f64>,
-    /// Reference (undeformed) position of each local node (for [`super::narrow::admissible`]).
+    /// Reference (undeformed) position of each local node (for [`super::rules::admissible`]).
     pub reference: Vec<[f64; 2]>,
     /// Slots: every pass's slave nodes in order, then every wall's nodes.
     pub slots: Vec<SlotTable>,

@@ -368,7 +368,7 @@ fn the_shipped_long_rod_penetrates_a_thick_target_with_no_node_inside_a_remainin
     assert!(debris < 5e-7, "{debris:e}");
     // No target node thrown out at several times the impact speed. Free nodes on the axis
     // slipped into the nose where its axis node lagged, and were thrown out along the axis at up
-    // to 8.75 km/s, until the vertex at the nose's axis end (`ricochet::contact::narrow::project`);
+    // to 8.75 km/s, until the vertex at the nose's axis end (`ricochet::contact::rules::project`);
     // a node passing over a convex corner of the crater was thrown sideways at 1.9 km/s until the
     // convex corner's rule (`outside_convex_corner`; 2026-11-28). Now the fastest is 1.0 km/s,
     // below the speed at which the nose's own nodes ring (up to 1.35 km/s in the same run).

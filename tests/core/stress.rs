@@ -612,7 +612,7 @@ fn sideways(o: &Outcome, bodies: [&str; 2], v0: f64) -> f64 {
 }
 
 /// A node on the bisector of a master corner ties between the corner's two segments; it is in
-/// contact with the corner node along its averaged normal (`contact::narrow::vertex`). Before,
+/// contact with the corner node along its averaged normal (`contact::rules::vertex`). Before,
 /// round-off picked one face: sideways momentum 4e-4 M v0 corner first, and 0.41 M v0 corner to
 /// corner, where the squares slid past each other instead of rebounding.
 #[test]

@@ -383,7 +383,7 @@ poisson_ratio = 0.3
 /// rises from its rim (r = 1 mm) to its axis node 0.5 mm above it (a dimple); one pass, the tip's
 /// nodes the slaves. The tip's apex meets the rod's axis node 1 mm before the rims could meet, and
 /// must stop there ([`apex_inside`]). Past the end of the nose's segment it meets the vertex that
-/// the segment makes with its mirror image across the axis (`ricochet::contact::narrow::project`);
+/// the segment makes with its mirror image across the axis (`ricochet::contact::rules::project`);
 /// without it the apex went on into the rod and ended 0.68 mm inside it (2026-11-28).
 pub const DIMPLE: &str = concat!(
     small_steel_run!(),
@@ -428,7 +428,7 @@ pub fn apex_inside(model: &Model, u: &[[f64; 2]]) -> f64 {
 /// lands on the top face at 4.5 us. Taken as penetrating the side (behind its line by 50 um,
 /// projecting onto it once it is below the apex), it was thrown to the left: the block's mean
 /// x velocity -492 m/s, and the run stopped on its energy balance (2026-11-28). The convex
-/// corner's rule (`ricochet::contact::narrow::outside_convex_corner`) leaves it alone.
+/// corner's rule (`ricochet::contact::rules::outside_convex_corner`) leaves it alone.
 pub const CORNER_PASS: &str = concat!(
     small_steel_run!(),
     r#"

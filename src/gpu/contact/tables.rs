@@ -61,7 +61,7 @@ pub struct GpuSegment {
     /// `SEGMENT_OFF`).
     pub off: u32,
     /// Bit 0: a lies on the axis of an axisymmetric body, bit 1: b does (WGSL `SEGMENT_AXIS_A`,
-    /// `SEGMENT_AXIS_B`; [`crate::contact::narrow::project`]).
+    /// `SEGMENT_AXIS_B`; [`crate::contact::rules::project`]).
     pub axis: u32,
     /// Padding to 32 bytes.
     pub _pad: u32,
