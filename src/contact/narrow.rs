@@ -148,7 +148,8 @@ impl ContactSet {
                     continue;
                 };
                 let [a, b] = p.segments[j];
-                // Outside the master body at a convex corner of the segment: no contact.
+                // The positions the candidates were judged at. Outside the master body at a
+                // convex corner of the segment: no contact.
                 let x = if p.method == ContactMethod::Lagrange {
                     &self.x_tr
                 } else {
@@ -196,11 +197,6 @@ impl ContactSet {
                     if !ties(key, key2, pr.length) {
                         continue;
                     }
-                    let x = if p.method == ContactMethod::Lagrange {
-                        &self.x_tr
-                    } else {
-                        &self.x_n
-                    };
                     if let Some(v) = vertex(x[s as usize], x[m as usize], pr.normal, pr2.normal) {
                         pr.normal = v.normal;
                         pr.gap = v.gap;
