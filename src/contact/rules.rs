@@ -69,7 +69,8 @@ pub const XI_TOLERANCE: f64 = 1e-6;
 pub struct Projection {
     /// Parameter of the closest point along a -> b, clamped to [0, 1].
     pub xi: f64,
-    /// Outward unit normal of the segment.
+    /// Outward unit normal: the segment's, or along the axis at the vertex it makes with its
+    /// mirror image past an end on the axis ([`project`]).
     pub normal: [f64; 2],
     /// Signed normal gap (negative: penetration).
     pub gap: f64,
