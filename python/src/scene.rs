@@ -215,23 +215,7 @@ fn plan(scene: &Scene) -> Result<serde_json::Value, ricochet::Error> {
     let solver = CpuSolver::new(model, plan.clone(), schedule);
     let model = solver.model();
     let (dt_element, e) = solver.stable_step();
-    let dt = contact
-        .as_ref()
-        .map_or(dt_element, |c| c.limit_step(dt_element));
-    let step = scene
-        .run
-        .time_step
-        .unwrap_or(scene.run.time_step_scale * dt);
-    if let Some(fixed) = scene.run.time_step {
-        if fixed > dt {
-            return Err(ricochet::Error::Invalid {
-                file: scene.file.clone(),
-                key: "run.time_step".into(),
-                value: format!("{fixed:e}"),
-                reason: format!("exceeds the stable step {dt:e} (set by element {e})"),
-            });
-        }
-    }
+    let (dt, step) = ricochet::run::checked_step(scene, (dt_element, e), contact.as_ref())?;
     let bodies: Vec<serde_json::Value> = model
         .bodies
         .iter()

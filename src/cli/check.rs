@@ -48,24 +48,7 @@ fn print_plan(scene: &Scene, model: Model, plan: &Plan) -> anyhow::Result<()> {
     let solver = CpuSolver::new(model, plan.clone(), schedule);
     let model = solver.model();
     let (dt_element, e) = solver.stable_step();
-    let dt = contact
-        .as_ref()
-        .map_or(dt_element, |c| c.limit_step(dt_element));
-    let step = scene
-        .run
-        .time_step
-        .unwrap_or(scene.run.time_step_scale * dt);
-    if let Some(fixed) = scene.run.time_step {
-        if fixed > dt {
-            return Err(ricochet::Error::Invalid {
-                file: scene.file.clone(),
-                key: "run.time_step".into(),
-                value: format!("{fixed:e}"),
-                reason: format!("exceeds the stable step {dt:e} (set by element {e})"),
-            }
-            .into());
-        }
-    }
+    let (dt, step) = ricochet::run::checked_step(scene, (dt_element, e), contact.as_ref())?;
     let steps = (scene.run.end_time / step).ceil() as u64;
     println!("scene      {} ({})", scene.name, scene.file.display());
     println!(

@@ -192,6 +192,30 @@ pub fn first_step(scene: &Scene, model: &Model) -> (f64, f64, usize, Option<Stri
     (step, dt_element, e, by)
 }
 
+/// The step `ricochet check` reports for a run of `scene`: the stable step of its solver
+/// (`dt_element`, set by element `e`) limited by `contact`'s penalty springs, and the step taken
+/// (the fixed `run.time_step`, or `time_step_scale` times the stable step), as `(stable, taken)`.
+///
+/// # Errors
+/// [`Error::Invalid`] naming `run.time_step` when a fixed step exceeds the stable step.
+pub fn checked_step(
+    scene: &Scene,
+    (dt_element, e): (f64, usize),
+    contact: Option<&crate::contact::ContactSet>,
+) -> Result<(f64, f64)> {
+    let dt = contact.map_or(dt_element, |c| c.limit_step(dt_element));
+    match scene.run.time_step {
+        Some(fixed) if fixed > dt => Err(Error::Invalid {
+            file: scene.file.clone(),
+            key: "run.time_step".into(),
+            value: format!("{fixed:e}"),
+            reason: format!("exceeds the stable step {dt:e} (set by element {e})"),
+        }),
+        Some(fixed) => Ok((dt, fixed)),
+        None => Ok((dt, scene.run.time_step_scale * dt)),
+    }
+}
+
 /// Refuses a run that would not end in a stated number of steps, history rows or snapshots
 /// ([`MAX_STEPS`], [`MAX_HISTORY_ROWS`], [`MAX_SNAPSHOTS`]), or whose first step is zero or not
 /// finite (a `time_step_scale` or `penalty_scale` at the end of the floating-point range).

@@ -24,8 +24,8 @@ pub use launch::{
     RunRequest, Start,
 };
 pub use limits::{
-    available_memory, check_gpu_limits, check_limits, check_memory, element_counts, first_step,
-    memory_estimate, BYTES_PER_ELEMENT, FIELD_BYTES_PER_ELEMENT, GPU_BYTES_PER_ELEMENT,
+    available_memory, check_gpu_limits, check_limits, check_memory, checked_step, element_counts,
+    first_step, memory_estimate, BYTES_PER_ELEMENT, FIELD_BYTES_PER_ELEMENT, GPU_BYTES_PER_ELEMENT,
     GPU_SAMPLE_BYTES, MAX_HISTORY_ROWS, MAX_SNAPSHOTS, MAX_STEPS, PLASTIC_BYTES_PER_ELEMENT,
 };
 pub use warnings::convergence_warning;
