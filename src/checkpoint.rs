@@ -34,9 +34,9 @@ use crate::scene::{MeshSpec, Scene};
 /// Name of the checkpoint file in the output folder.
 pub const FILE: &str = "checkpoint.bin";
 
-/// First bytes of a checkpoint file (format name and version: 6 since the GPU's control block
-/// counts the elements eroded since the contact surfaces last followed them).
-pub const MAGIC: &[u8; 8] = b"RICOCHK6";
+/// First bytes of a checkpoint file (format name and version: 7 since the GPU's counters hold
+/// the contact surfaces' follows of erosion, [`crate::step::Counters::erosion_follows`]).
+pub const MAGIC: &[u8; 8] = b"RICOCHK7";
 
 /// The largest checkpoint file read (a checkpoint holds a few hundred bytes per node).
 pub const MAX_BYTES: u64 = 16 << 30;

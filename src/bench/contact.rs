@@ -95,6 +95,10 @@ fn contact_rows(
         }
     }
     let before: Vec<_> = sides.iter().map(|s| s.with.count()).collect();
+    let failure_before: Vec<_> = sides
+        .iter()
+        .map(|s| s.failure.as_ref().map(|f| f.count()))
+        .collect();
     let cpu_first = sides.first().is_some_and(|s| s.backend == "cpu");
     let meta: Vec<(&'static str, String)> = sides
         .iter()
@@ -141,6 +145,14 @@ fn contact_rows(
         };
         let (friction_steps_per_second, friction_us_per_step) = extra("friction");
         let (failure_steps_per_second, failure_us_per_step) = extra("failure");
+        // The failure variant's follows of erosion in the timed steps, and their mean host time.
+        let follows = side.failure.as_ref().zip(failure_before[k]).map(|(f, b)| {
+            let a = f.count();
+            (
+                a.erosion_follows - b.erosion_follows,
+                a.erosion_follow_seconds - b.erosion_follow_seconds,
+            )
+        });
         let vs_cpu = (cpu_first && k > 0)
             .then(|| median(times[0].iter().zip(&t[0]).map(|(c, g)| c / g).collect()));
         let searches = after.contact_searches - before[k].contact_searches;
@@ -171,6 +183,8 @@ fn contact_rows(
             failure_steps_per_second,
             failure_us_per_step,
             failure_eroded: side.failure.as_ref().map(|f| f.count().eroded_elements),
+            failure_follows: follows.map(|(n, _)| n),
+            failure_follow_us: follows.map(|(n, t)| if n > 0 { 1e6 * t / n as f64 } else { 0.0 }),
             searches,
             searches_per_100_steps: 100.0 * searches as f64 / total as f64,
             bytes_read_back_per_step: (after.bytes_read_back - before[k].bytes_read_back) as f64
@@ -456,6 +470,8 @@ mod tests {
         assert!(row.failure_steps_per_second.is_some_and(|f| f > 0.0));
         assert!(row.failure_us_per_step.is_some_and(f64::is_finite));
         assert!(row.failure_eroded.is_some());
+        assert!(row.failure_follows.is_some());
+        assert!(row.failure_follow_us.is_some_and(|us| us >= 0.0));
         let table = contact_table(&[row]);
         assert!(table.contains("failure [us/st]") && table.contains("friction [us/st]"));
     }

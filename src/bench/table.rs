@@ -195,6 +195,13 @@ pub struct ContactRow {
     pub failure_us_per_step: Option<f64>,
     /// With `--failure`: elements the variant with failure eroded by the end of its timed steps.
     pub failure_eroded: Option<u64>,
+    /// With `--failure`: times the variant's contact surfaces followed erosion during its timed
+    /// steps ([`crate::step::Counters::erosion_follows`]).
+    pub failure_follows: Option<u64>,
+    /// With `--failure`: the host's mean wall time per follow in those steps, in microseconds
+    /// (GPU: the eroded flags' readback, the host's follow and the writes; the forced search
+    /// runs on the device and is in `failure_us_per_step`, not here; 0 without a follow).
+    pub failure_follow_us: Option<f64>,
     /// Broad-phase searches during the timed steps with contact.
     pub searches: u64,
     /// Searches per 100 timed steps.
@@ -210,8 +217,9 @@ pub struct ContactRow {
 
 /// Formats contact rows as a table.
 /// With `--friction`, three more columns: the steps per second with friction, what friction
-/// adds to a step (microseconds) and its sweeps; with `--failure`, three more: the steps per
-/// second with failure, what it adds to a step and the elements eroded; with `--plain-sweeps`,
+/// adds to a step (microseconds) and its sweeps; with `--failure`, five more: the steps per
+/// second with failure, what it adds to a step, the elements eroded, the follows of erosion in
+/// the timed steps and the host's mean time per follow (microseconds); with `--plain-sweeps`,
 /// a line saying so under it.
 pub fn contact_table(rows: &[ContactRow]) -> String {
     let rough = rows.iter().any(|r| r.friction.is_some());
@@ -241,8 +249,8 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
     }
     if failing {
         s.push_str(&format!(
-            " {:>15} {:>17} {:>7}",
-            "failure steps/s", "failure [us/st]", "eroded"
+            " {:>15} {:>17} {:>7} {:>7} {:>11}",
+            "failure steps/s", "failure [us/st]", "eroded", "follows", "follow [us]"
         ));
     }
     s.push('\n');
@@ -288,6 +296,10 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
                     s.push_str(&format!(" {f:>15.1} {us:>17.2} {n:>7}"))
                 }
                 _ => s.push_str(&format!(" {:>15} {:>17} {:>7}", "-", "-", "-")),
+            }
+            match (r.failure_follows, r.failure_follow_us) {
+                (Some(n), Some(us)) => s.push_str(&format!(" {n:>7} {us:>11.1}")),
+                _ => s.push_str(&format!(" {:>7} {:>11}", "-", "-")),
             }
         }
         s.push('\n');

@@ -264,6 +264,16 @@ pub struct Counters {
     /// Elements eroded so far (0 without failure): it grows in a batch where elements erode.
     #[serde(default)]
     pub eroded_elements: u64,
+    /// Times the contact surfaces followed erosion (steps in which elements eroded, in a scene
+    /// with failure and contact or walls; 0 otherwise).
+    #[serde(default)]
+    pub erosion_follows: u64,
+    /// Host wall seconds those follows took: on the GPU the eroded flags read back, the host's
+    /// follow of its copy of the contact set and the writes of the entries that changed (the
+    /// forced search and the resumed step run on the device, not counted); on the CPU the
+    /// follow ([`crate::contact::ContactSet::follow_erosion`]).
+    #[serde(default)]
+    pub erosion_follow_seconds: f64,
 }
 
 /// A time integrator of a model: the CPU reference or the GPU backend.

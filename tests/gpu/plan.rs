@@ -267,6 +267,15 @@ fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
         assert!(r.friction_steps_per_second.is_some_and(|f| f > 0.0));
         assert!(r.failure_steps_per_second.is_some_and(|f| f > 0.0));
         assert!(r.failure_eroded.is_some());
+        // Every erosion in the timed steps is one follow of the contact surfaces at most.
+        let (eroded, follows) = (r.failure_eroded, r.failure_follows.expect("follows"));
+        assert!(
+            eroded.is_some_and(|n| follows <= n),
+            "{follows} follows, {eroded:?} eroded"
+        );
+        assert!(r
+            .failure_follow_us
+            .is_some_and(|us| us >= 0.0 && us.is_finite()));
     }
     assert_eq!(rows[0].vs_cpu, None);
     let v = rows[1].vs_cpu.expect("the GPU row's ratio to the CPU");

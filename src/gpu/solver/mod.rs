@@ -459,6 +459,7 @@ impl GpuSolver {
     /// reads the eroded flags, moves the contact surfaces onto the edges they expose (and the
     /// penalty springs' step with them), and resumes the step from its contact stage.
     fn contact_follow_erosion(&mut self) -> Result<()> {
+        let t0 = std::time::Instant::now();
         let Some(buf) = self.state.erosion.clone() else {
             return Err(Error::Gpu("erosion stop without erosion state".into()));
         };
@@ -487,6 +488,8 @@ impl GpuSolver {
             CONTROL_ERODED_OFFSET,
             bytemuck::bytes_of(&0u32),
         );
+        self.counters.erosion_follows += 1;
+        self.counters.erosion_follow_seconds += t0.elapsed().as_secs_f64();
         let ran = self.ctrl.step.saturating_sub(self.batch_start);
         self.erosion_cap = (2 * ran).clamp(2, MAX_BATCH);
         self.resume_step();

@@ -26,6 +26,9 @@ pub struct CpuSolver {
     pressure: Vec<(usize, u32, [f64; 2])>,
     /// What changes while it runs.
     s: CpuState,
+    /// The contact set's follows of erosion in this process: how many, and their seconds
+    /// ([`crate::step::Counters::erosion_follows`]; not part of a checkpoint).
+    follows: (u64, f64),
 }
 
 /// Everything of a [`CpuSolver`] that changes while it runs (the model, plan, schedule and what
@@ -159,6 +162,7 @@ impl CpuSolver {
             plan,
             schedule,
             s,
+            follows: (0, 0.0),
         }
     }
 
@@ -313,7 +317,10 @@ impl CpuSolver {
         if self.s.erosion.count != eroded_before {
             // Eroding contact: the surfaces follow, and this step's contact searches again.
             if let Some(c) = self.s.contact.as_mut() {
+                let t0 = std::time::Instant::now();
                 c.follow_erosion(&self.model, &self.s.erosion.eroded);
+                self.follows.0 += 1;
+                self.follows.1 += t0.elapsed().as_secs_f64();
             }
         }
         if st.dt_min == f64::INFINITY && self.s.erosion.count > 0 && self.s.n > 0 {
@@ -669,6 +676,8 @@ impl Solver for CpuSolver {
             contact_residual_max: s.residual_max,
             contact_penalty_bounded: self.s.contact.as_ref().map_or(0, |c| c.penalty_bounded()),
             eroded_elements: self.s.erosion.count,
+            erosion_follows: self.follows.0,
+            erosion_follow_seconds: self.follows.1,
             ..Default::default()
         }
     }
