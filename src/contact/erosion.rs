@@ -21,15 +21,37 @@
 //! surface now. In the step that eroded an element the device stops before its contact stage;
 //! the host follows the erosion on its copy of the set (this function, from the per-element
 //! flags read back), writes the mask with the slaves' neighbours and stiffnesses of the new
-//! surfaces into the fixed lists ([`Masked::tables`]) and resumes the step with a search, which
-//! skips masked entries. No slot or segment is renumbered, so the constraints' warm starts and
+//! surfaces into the fixed lists (the entries on before or now, [`Masked::changes`], whose result
+//! is [`Masked::tables`]'s: work and bytes in the surfaces' size, not the candidates') and resumes
+//! the step with a search, which skips masked entries. No slot or segment is renumbered, so the constraints' warm starts and
 //! the multipliers that slots carry stay where they are, and the update depends only on the
 //! flags: the same bits every run.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 
+use super::tables::{SegmentTable, SlotTable};
 use super::{ContactSet, Tables};
 use crate::model::Model;
+
+/// The entries of [`Masked`]'s fixed lists that are on (not masked) in a layout, ascending: what
+/// [`Masked::changes`] compares the next layout with.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LaidOut {
+    /// Slots on.
+    pub slots: Vec<u32>,
+    /// Segments on.
+    pub segments: Vec<u32>,
+}
+
+/// The entries of [`Masked`]'s fixed lists that a new layout may change, each with its index and
+/// its content in the new layout, ascending by index.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Changes {
+    /// Slots.
+    pub slots: Vec<(u32, SlotTable)>,
+    /// Segments.
+    pub segments: Vec<(u32, SegmentTable)>,
+}
 
 /// The GPU's fixed contact lists of an eroding scene: the tables of every candidate slot and
 /// segment (`contact::build::every_candidate`), onto which [`Masked::tables`] lays the surfaces
@@ -89,26 +111,75 @@ impl Masked {
     /// slots and segments at its candidate's place (the slots' neighbour slots renumbered), every
     /// other candidate off. `None` when one of them is not a candidate.
     pub fn tables(&self, set: &ContactSet) -> Option<Tables> {
-        let now = set.tables();
-        let at: Vec<u32> = now
-            .slots
+        let mut out = self.every.clone();
+        let changes = self.changes(set, &mut LaidOut::default())?;
+        for (k, t) in changes.slots {
+            out.slots[k as usize] = t;
+        }
+        for (k, g) in changes.segments {
+            out.segments[k as usize] = g;
+        }
+        out.margin = set.margin;
+        Some(out)
+    }
+
+    /// The entries on in the layout of `set` ([`Masked::tables`]); `None` as there.
+    pub fn laid_out(&self, set: &ContactSet) -> Option<LaidOut> {
+        let mut on = LaidOut::default();
+        self.changes(set, &mut on)?;
+        Some(on)
+    }
+
+    /// What laying out `set`'s surfaces (as it follows erosion) changes in the fixed lists after
+    /// the layout whose entries on were `on`: every entry on before or now, with its content in
+    /// [`Masked::tables`]`(set)` (`set`'s slot or segment where it is on, the candidate's masked
+    /// entry where it left); `on` becomes `set`'s. Work in the size of the surfaces, not of the
+    /// candidates: applied to the lists of the layout before, it gives those of
+    /// [`Masked::tables`]. `None` as there (and `on` unchanged).
+    pub fn changes(&self, set: &ContactSet, on: &mut LaidOut) -> Option<Changes> {
+        let (slots, segments) = set.entries();
+        let at: Vec<u32> = slots
             .iter()
             .map(|s| self.slot_at.get(&(s.pass, s.interface, s.node)).copied())
             .collect::<Option<_>>()?;
-        let mut out = self.every.clone();
-        for (s, &k) in now.slots.iter().zip(&at) {
+        let seg_at: Vec<u32> = segments
+            .iter()
+            .map(|g| {
+                self.segment_at
+                    .get(&(g.pass, g.nodes[0], g.nodes[1]))
+                    .copied()
+            })
+            .collect::<Option<_>>()?;
+        let mut new_slots: BTreeMap<u32, SlotTable> = on
+            .slots
+            .iter()
+            .map(|&k| (k, self.every.slots[k as usize]))
+            .collect();
+        for (s, &k) in slots.iter().zip(&at) {
             let mut t = *s;
             t.neighbour_slots = s
                 .neighbour_slots
                 .map(|j| at.get(j as usize).copied().unwrap_or(u32::MAX));
-            out.slots[k as usize] = t;
+            new_slots.insert(k, t);
         }
-        for g in &now.segments {
-            let k = *self.segment_at.get(&(g.pass, g.nodes[0], g.nodes[1]))?;
-            out.segments[k as usize] = *g;
+        let mut new_segments: BTreeMap<u32, SegmentTable> = on
+            .segments
+            .iter()
+            .map(|&k| (k, self.every.segments[k as usize]))
+            .collect();
+        for (g, &k) in segments.iter().zip(&seg_at) {
+            new_segments.insert(k, *g);
         }
-        out.margin = now.margin;
-        Some(out)
+        let sorted = |mut v: Vec<u32>| {
+            v.sort_unstable();
+            v
+        };
+        on.slots = sorted(at);
+        on.segments = sorted(seg_at);
+        Some(Changes {
+            slots: new_slots.into_iter().collect(),
+            segments: new_segments.into_iter().collect(),
+        })
     }
 }
 

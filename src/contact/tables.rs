@@ -98,6 +98,20 @@ impl ContactSet {
 
     /// The static tables of the GPU kernels.
     pub fn tables(&self) -> Tables {
+        let (slots, segments) = self.entries();
+        Tables {
+            nodes: self.nodes.clone(),
+            inv_mass: self.inv_mass.clone(),
+            mass: self.mass.clone(),
+            reference: self.reference.clone(),
+            slots,
+            segments,
+            margin: self.margin,
+        }
+    }
+
+    /// The slots and segments of [`ContactSet::tables`] alone (what erosion changes).
+    pub fn entries(&self) -> (Vec<SlotTable>, Vec<SegmentTable>) {
         let mut slots = Vec::new();
         let mut segments = Vec::new();
         for (pi, p) in self.passes.iter().enumerate() {
@@ -168,15 +182,7 @@ impl ContactSet {
                 });
             }
         }
-        Tables {
-            nodes: self.nodes.clone(),
-            inv_mass: self.inv_mass.clone(),
-            mass: self.mass.clone(),
-            reference: self.reference.clone(),
-            slots,
-            segments,
-            margin: self.margin,
-        }
+        (slots, segments)
     }
 }
 

@@ -249,6 +249,10 @@ fn two_body_group_self_contact_and_walls_follow_erosion() {
         // The GPU's fixed lists under their mask: the same sides as built.
         let masked = Masked::new(&model, &fresh_set).unwrap();
         assert_masked_as_followed(&masked, &fresh_set, &fresh);
+        // The GPU's update in the surfaces' size: the lists of the layout before, changed entry
+        // by entry, are those laid out from scratch after each pattern below.
+        let mut lists = masked.tables(&fresh_set).unwrap();
+        let mut on = masked.laid_out(&fresh_set).unwrap();
         let striker = model.bodies[2].elements.clone();
         for (k, p) in [0.1, 0.3, 0.6, 1.0].iter().enumerate() {
             for seed in 0..4 {
@@ -262,6 +266,17 @@ fn two_body_group_self_contact_and_walls_follow_erosion() {
                 let got = sides(&set);
                 assert_eq!(got, expected(&model, &fresh, &eroded), "{contacts}");
                 assert_masked_as_followed(&masked, &set, &got);
+                let changes = masked.changes(&set, &mut on).unwrap();
+                let whole = masked.tables(&set).unwrap();
+                for (k, t) in changes.slots {
+                    lists.slots[k as usize] = t;
+                }
+                for (k, g) in changes.segments {
+                    lists.segments[k as usize] = g;
+                }
+                assert_eq!(lists.slots, whole.slots, "{contacts}");
+                assert_eq!(lists.segments, whole.segments, "{contacts}");
+                assert_eq!(on, masked.laid_out(&set).unwrap());
                 // The search is forced, and the pass runs.
                 let searches = set.searches();
                 let n = model.node_count();

@@ -2,14 +2,15 @@
 //! slot and segment lists hold every candidate under a mask ([`crate::contact::erosion::Masked`]),
 //! and after a step stopped with [`super::STATE_ERODED`] the host follows the erosion on its copy of the
 //! contact set (the CPU reference's [`crate::contact::ContactSet::follow_erosion`]) and writes the
-//! entries that changed (`ContactState::follow_erosion`); the search skips masked entries
-//! (`shaders/contact_search.wgsl`).
+//! entries that changed among those on before or now ([`Masked::changes`]; the whole lists only
+//! after a checkpoint's buffers were restored), in `ContactState::follow_erosion`; the search
+//! skips masked entries (`shaders/contact_search.wgsl`).
 
 use bytemuck::Pod;
 
 use super::tables::{GpuSegment, GpuSlot};
 use super::{ContactState, PARAMS_SIZE};
-use crate::contact::erosion::Masked;
+use crate::contact::erosion::{LaidOut, Masked};
 use crate::contact::Tables;
 use crate::error::{Error, Result};
 use crate::model::Model;
@@ -19,8 +20,13 @@ use crate::model::Model;
 pub(super) struct Eroding {
     pub masked: Masked,
     pub model: Box<Model>,
+    /// The device's slot and segment lists as last written (empty: not known, after a
+    /// checkpoint's buffers were restored).
     pub slots: Vec<GpuSlot>,
+    /// See `slots`.
     pub segments: Vec<GpuSegment>,
+    /// The entries on in them.
+    pub on: LaidOut,
 }
 
 /// Writes the entries of `now` that differ from `was` into `buffer` (records of `T` from offset
@@ -64,6 +70,40 @@ fn write_changed<T: Pod + PartialEq>(
     }
 }
 
+/// Sets the entries `changes` of `was` (the device's list of `T`, records from offset 0 of
+/// `buffer`) and writes those that differ, one write per run of them (runs fewer than 16 entries
+/// apart merged): the work and the bytes are those of the entries that changed, not of the list.
+fn write_entries<T: Pod + PartialEq>(
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    was: &mut [T],
+    changes: impl Iterator<Item = (usize, T)>,
+) {
+    let mut dirty: Vec<usize> = Vec::new();
+    for (k, t) in changes {
+        if was[k] != t {
+            was[k] = t;
+            dirty.push(k);
+        }
+    }
+    let size = std::mem::size_of::<T>();
+    let mut i = 0;
+    while i < dirty.len() {
+        let start = dirty[i];
+        let mut end = start + 1;
+        i += 1;
+        while i < dirty.len() && dirty[i] < end + 16 {
+            end = dirty[i] + 1;
+            i += 1;
+        }
+        queue.write_buffer(
+            buffer,
+            (start * size) as u64,
+            bytemuck::cast_slice(&was[start..end]),
+        );
+    }
+}
+
 /// The error of eroding contact tables that cannot be built or followed (`what` of them).
 pub(super) fn unfollowed(what: &str) -> Error {
     Error::Gpu(format!(
@@ -91,23 +131,55 @@ impl ContactState {
         // As on the CPU: a set that cannot follow (never with a set built for this model)
         // keeps its surfaces.
         self.set.follow_erosion(&er.model, eroded);
-        let t: Tables = er
-            .masked
-            .tables(&self.set)
-            .ok_or_else(|| unfollowed("lay out"))?;
-        let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
-        let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
         let buffer = |binding: u32| {
             self.entries
                 .iter()
                 .find(|e| e.0 == binding)
                 .map(|e| e.1.clone())
         };
-        if let (Some(b), false) = (buffer(7), slots.is_empty()) {
-            write_changed(queue, &b, &mut er.slots, &slots);
-        }
-        if let (Some(b), false) = (buffer(8), segs.is_empty()) {
-            write_changed(queue, &b, &mut er.segments, &segs);
+        let (b_slots, b_segs) = (buffer(7), buffer(8));
+        let known = er.slots.len() + er.segments.len() == {
+            let (ns, ng) = er.masked.sizes();
+            ns + ng
+        };
+        if known {
+            // The entries on before or now, against what the device holds.
+            let ch = er
+                .masked
+                .changes(&self.set, &mut er.on)
+                .ok_or_else(|| unfollowed("lay out"))?;
+            if let Some(b) = &b_slots {
+                let it = ch
+                    .slots
+                    .iter()
+                    .map(|(k, t)| (*k as usize, GpuSlot::from(t)));
+                write_entries(queue, b, &mut er.slots, it);
+            }
+            if let Some(b) = &b_segs {
+                let it = ch
+                    .segments
+                    .iter()
+                    .map(|(k, g)| (*k as usize, GpuSegment::from(g)));
+                write_entries(queue, b, &mut er.segments, it);
+            }
+        } else {
+            // The device's lists are not known (a checkpoint restored): all of them.
+            let t: Tables = er
+                .masked
+                .tables(&self.set)
+                .ok_or_else(|| unfollowed("lay out"))?;
+            er.on = er
+                .masked
+                .laid_out(&self.set)
+                .ok_or_else(|| unfollowed("lay out"))?;
+            let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
+            let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
+            if let (Some(b), false) = (&b_slots, slots.is_empty()) {
+                write_changed(queue, b, &mut er.slots, &slots);
+            }
+            if let (Some(b), false) = (&b_segs, segs.is_empty()) {
+                write_changed(queue, b, &mut er.segments, &segs);
+            }
         }
         // Counters: due = 1 (offset 0).
         queue.write_buffer(&self.ctl, PARAMS_SIZE, bytemuck::bytes_of(&1u32));

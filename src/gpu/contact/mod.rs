@@ -444,12 +444,18 @@ impl ContactState {
         let node_words = tables::node_words(&t);
         let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
         let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
-        let eroding = masked.map(|masked| erosion::Eroding {
-            masked,
-            model: Box::new(model.clone()),
-            slots: slots.clone(),
-            segments: segs.clone(),
-        });
+        let eroding = match masked {
+            Some(masked) => Some(erosion::Eroding {
+                on: masked
+                    .laid_out(&set)
+                    .ok_or_else(|| erosion::unfollowed("lay out"))?,
+                masked,
+                model: Box::new(model.clone()),
+                slots: slots.clone(),
+                segments: segs.clone(),
+            }),
+            None => None,
+        };
         let names = set.names();
         let iface = tables::interface_starts(&t, names.len())?;
         let ni = names.len() as u32;
