@@ -14,11 +14,15 @@
 #   5. profile  device us per step by part (timestamp queries) of the block at 10^5 and 10^6 and
 #               of the striker and the pile at 10^4, 10^5, 10^6: 600 warm-up steps, 200 profiled
 #                                                                                 -> profile.json
+#   6. erosion  the striker at 10^4 and 10^5 with contact and with failure on every material
+#               (`--failure`: elements erode at a principal strain of 0.03 from about step 60,
+#               about one a step, and the contact surfaces follow them): 100 warm-up steps, 200
+#               timed in 3 rounds                                                 -> bench_erosion.json
 # The JSON files are the binary's own (`ricochet bench --json`, `--probe`, `--profile`). With them,
 # meta.json (date, commit, the binary's version, adapter, driver, nvidia-smi, each step's command,
 # status, exit code and seconds, the steps skipped) and device.log (all that was printed) go to
 #   OUT_DIR/<date>_<adapter>/     e.g. benches/results/2026-11-27_nvidia-h100-80gb-hbm3/
-# Seven files: the device tool brings back at most 8 files a call, at most 2 folders down.
+# Eight files: the device tool brings back at most 8 files a call, at most 2 folders down.
 #
 # Usage: benches/device.sh BINARY [OUT_DIR]            (OUT_DIR: benches/results by default)
 # Environment:
@@ -53,7 +57,12 @@
 #            disks' scene generated and meshed twice: 20-60 s. About 40 s                 [150 s]
 #   profile  800 steps of each of 8 scenes, at most 2.2 ms a step: 6 s; 8 models, the 10^6 pile
 #            the slowest (10-30 s): about 60 s                                            [180 s]
-# About 2.5-3 minutes in all; the caps and the default budget (450 s) keep the call inside the
+#   erosion  never run on an NVIDIA GPU yet: 700 steps of each of three variants a size, a follow
+#            of erosion about every second step, each a round trip with the host's follow of the
+#            contact surfaces (lavapipe, 2026-11-28: 1.7 ms of host time a follow at 10^4, and
+#            15 ms a step in all with the forced searches). If a follow took 20 ms at 10^5, the
+#            variant would take about 7 s there: 15-30 s with the models                    [90 s]
+# About 3-3.5 minutes in all; the caps and the default budget (450 s) keep the call inside the
 # device tool's 8 minutes for the script (10 minutes a call) even when a step hangs.
 set -uo pipefail
 export LC_ALL=C
@@ -188,7 +197,9 @@ if [ "$SMALL" = 1 ]; then
   CONTACT=(--warmup 10 --steps 20 --rounds 2)
   # The striker alone: each scene compiles its kernels again, which lavapipe takes seconds to do.
   PROFILE=(--scene striker --warmup 10 --steps 10)
-  NEED=(5 5 5 5 5)
+  EROSION=(400)
+  FAILURE=(--warmup 10 --steps 20 --rounds 2)
+  NEED=(5 5 5 5 5 5)
 else
   PROBE=(--probe-mib 512 --probe-dispatches 1000 --rounds 10)
   CELLS=(316 1000)
@@ -197,7 +208,9 @@ else
   BLOCK=(--steps 200 --rounds 5)
   CONTACT=(--warmup 600 --steps 400 --rounds 8)
   PROFILE=(--scene block striker pile --cells 316 1000 --warmup 600 --steps 200)
-  NEED=(10 30 30 40 60)
+  EROSION=(10000 100000)
+  FAILURE=(--warmup 100 --steps 200 --rounds 3)
+  NEED=(10 30 30 40 60 20)
 fi
 
 say "device check: $BIN ($VERSION, commit $COMMIT) into $OUT_DIR, budget $BUDGET s"
@@ -231,6 +244,8 @@ run_step pile "${NEED[3]}" 150 bench_pile.json \
   "$BIN" bench --backend gpu --scene pile --elements "${PILE[@]}" "${CONTACT[@]}"
 run_step profile "${NEED[4]}" 180 profile.json \
   "$BIN" bench --profile --elements "${ELEMENTS[@]}" "${PROFILE[@]}"
+run_step erosion "${NEED[5]}" 90 bench_erosion.json \
+  "$BIN" bench --backend gpu --scene striker --elements "${EROSION[@]}" "${FAILURE[@]}" --failure
 
 say "done: $DIR ($([ "$FAILED" = 0 ] && echo "every step ran" || echo "see meta.json: not every step ran"))"
 [ "$FAILED" = 0 ] || exit 3

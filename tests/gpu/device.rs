@@ -177,6 +177,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
         names,
         [
             "bench_block.json",
+            "bench_erosion.json",
             "bench_pile.json",
             "bench_striker.json",
             "meta.json",
@@ -196,7 +197,10 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     assert_eq!(meta["adapter"], get("probe.json")["adapter"]);
     let steps = meta["steps"].as_array().expect("steps");
     let step_names: Vec<&str> = steps.iter().filter_map(|s| s["name"].as_str()).collect();
-    assert_eq!(step_names, ["probe", "block", "striker", "pile", "profile"]);
+    assert_eq!(
+        step_names,
+        ["probe", "block", "striker", "pile", "profile", "erosion"]
+    );
     for s in steps {
         assert_eq!(s["status"], "ok", "{s}");
         assert_eq!(s["exit"], 0, "{s}");
@@ -216,6 +220,20 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
         );
         assert!(rows.iter().all(|r| r["warmup"] == 10));
     }
+    // The striker with failure: the variant's rate beside the contact step's.
+    let rows = get("bench_erosion.json")["contact"]
+        .as_array()
+        .expect("erosion rows");
+    assert!(!rows.is_empty());
+    for r in rows {
+        assert_eq!(r["scene"], "striker");
+        assert!(
+            r["failure_steps_per_second"]
+                .as_f64()
+                .is_some_and(|v| v > 0.0),
+            "{r}"
+        );
+    }
     let profile = get("profile.json");
     match profile["timestamps"].as_bool() {
         Some(true) => assert!(!profile["rows"].as_array().expect("rows").is_empty()),
@@ -231,7 +249,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     let files = json_files(&dir);
     assert_eq!(files.len(), 1, "meta.json alone");
     let steps = files[0].1["steps"].as_array().expect("steps").clone();
-    assert_eq!(steps.len(), 5);
+    assert_eq!(steps.len(), 6);
     assert!(steps
         .iter()
         .all(|s| s["status"] == "skipped" && s["file"].is_null()));
