@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use super::report::Interface;
 use super::{ContactSet, Law, Pass, Wall};
 use crate::geometry::quad_geometry;
-use crate::model::surface::{self, EdgeCandidates, Surface};
+use crate::model::surface::{self, EdgeCandidates, Exposure, Surface};
 use crate::model::Model;
 use crate::scene::{Contact, PenaltyForm};
 
@@ -50,11 +50,15 @@ fn element_area(model: &Model, e: u32) -> f64 {
 }
 
 /// The surfaces an erosion rebuild reuses ([`rebuild`]): per body its candidate edges and its
-/// surface as meshed, once computed (they depend only on the mesh).
+/// surface as meshed, once computed (they depend only on the mesh), and per erodible body its
+/// exposure under the flags of the last rebuild (`eroded`), which the next one brings up to date
+/// in the size of what changed ([`EdgeCandidates::update`]).
 #[derive(Debug, Clone, Default)]
 pub(super) struct Cache {
     candidates: Vec<Option<EdgeCandidates>>,
     initial: Vec<Option<Surface>>,
+    exposure: Vec<Option<Exposure>>,
+    eroded: Vec<bool>,
 }
 
 /// Surfaces and local node numbering while the set is built.
@@ -71,6 +75,8 @@ struct Builder<'m> {
     initial: Vec<Option<Surface>>,
     /// The candidate edges of the bodies that can erode, when first needed.
     candidates: Vec<Option<EdgeCandidates>>,
+    /// The erodible bodies' exposures under `eroded` (a rebuild's: [`Cache`]), when first needed.
+    exposure: Vec<Option<Exposure>>,
     local: Vec<u32>,
     nodes: Vec<u32>,
     min_length: f64,
@@ -88,6 +94,7 @@ impl<'m> Builder<'m> {
             surfaces: vec![None; nb],
             initial: vec![None; nb],
             candidates: vec![None; nb],
+            exposure: vec![None; nb],
             local: vec![u32::MAX; model.node_count()],
             nodes: Vec::new(),
             min_length: f64::INFINITY,
@@ -133,10 +140,22 @@ impl<'m> Builder<'m> {
         if let Some(s) = &self.surfaces[b] {
             return s.clone();
         }
-        let eroded = self.eroded;
-        let s = self.candidates(b).surface(eroded);
+        self.exposure(b);
+        let s = match (&self.candidates[b], &self.exposure[b]) {
+            (Some(c), Some(x)) => c.surface_of(x),
+            _ => return self.initial_surface(b),
+        };
         self.surfaces[b] = Some(s.clone());
         s
+    }
+
+    /// Makes body `b`'s exposure under `eroded` (an erodible body, `eroded` not empty).
+    fn exposure(&mut self, b: usize) {
+        if self.exposure[b].is_none() {
+            let eroded = self.eroded;
+            let x = self.candidates(b).exposure(eroded);
+            self.exposure[b] = Some(x);
+        }
     }
 
     /// Body `b`'s free nodes (of eroded elements only), within the nodes of `only` (global node
@@ -145,13 +164,16 @@ impl<'m> Builder<'m> {
         if !self.erodible(b) || (self.eroded.is_empty() && !self.every) {
             return Vec::new();
         }
-        let all = if self.every {
-            vec![true; self.model.quads.len()]
+        let mut free = if self.every {
+            let all = vec![true; self.model.quads.len()];
+            self.candidates(b).free_nodes(&all)
         } else {
-            Vec::new()
+            self.exposure(b);
+            match (&self.candidates[b], &self.exposure[b]) {
+                (Some(c), Some(x)) => c.free_of(x),
+                _ => Vec::new(),
+            }
         };
-        let eroded = if self.every { &all[..] } else { self.eroded };
-        let mut free = self.candidates(b).free_nodes(eroded);
         if let Some(edges) = only {
             let set: std::collections::HashSet<u32> = edges.iter().flatten().copied().collect();
             free.retain(|g| set.contains(g));
@@ -581,9 +603,33 @@ pub(super) fn rebuild(
         bld.candidates = std::mem::take(&mut cache.candidates);
         bld.initial = std::mem::take(&mut cache.initial);
     }
+    if cache.exposure.len() == nb && cache.eroded.len() == eroded.len() {
+        // The exposures of the last rebuild, brought to `eroded`: the elements whose flag
+        // changed, body by body (elements are numbered body after body).
+        let changed: Vec<u32> = (0..eroded.len())
+            .filter(|&e| eroded[e] != cache.eroded[e])
+            .map(|e| e as u32)
+            .collect();
+        let mut exposure = std::mem::take(&mut cache.exposure);
+        for (b, x) in exposure.iter_mut().enumerate() {
+            match (x.as_mut(), bld.candidates[b].as_ref()) {
+                (Some(ex), Some(c)) => {
+                    let r = &model.bodies[b].elements;
+                    let from = changed.partition_point(|&e| (e as usize) < r.start);
+                    let to = changed.partition_point(|&e| (e as usize) < r.end);
+                    c.update(ex, &changed[from..to], eroded, &model.quads);
+                }
+                // No candidates kept: the exposure is made again when needed.
+                _ => *x = None,
+            }
+        }
+        bld.exposure = exposure;
+    }
     let (out, bld) = build_kept(bld, nodes);
     cache.candidates = bld.candidates;
     cache.initial = bld.initial;
+    cache.exposure = bld.exposure;
+    cache.eroded = eroded.to_vec();
     out
 }
 

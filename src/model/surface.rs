@@ -99,6 +99,11 @@ impl Surface {
             k = m;
         }
         segments.sort_by_key(|s| (s.element, s.nodes));
+        Surface::of_segments(body, segments)
+    }
+
+    /// The surface of body `body` made of `segments` (in their order), with their nodes.
+    fn of_segments(body: usize, segments: Vec<Segment>) -> Surface {
         let mut nodes: Vec<u32> = segments.iter().flat_map(|s| s.nodes).collect();
         nodes.sort_unstable();
         nodes.dedup();
@@ -125,6 +130,8 @@ pub struct EdgeCandidates {
     pub edges: Vec<Segment>,
     /// The element across each edge ([`NONE`]: none, an edge of the mesh's boundary).
     pub across: Vec<u32>,
+    /// The candidate of the element across with the same two nodes ([`NONE`]: none).
+    twin: Vec<u32>,
     /// Per node of the body (from `nodes.start`): the range of its elements in `node_elements`.
     node_start: Vec<u32>,
     /// The elements of each node, node after node.
@@ -195,10 +202,27 @@ impl EdgeCandidates {
         }
         let mut order: Vec<usize> = (0..edges.len()).collect();
         order.sort_by_key(|&i| (edges[i].1.element, edges[i].1.nodes));
+        // Each edge's twin (same node pair, the element across), in the final order.
+        let mut position = vec![0u32; edges.len()];
+        for (new, &old) in order.iter().enumerate() {
+            position[old] = new as u32;
+        }
+        let mut twin = vec![NONE; edges.len()];
+        let mut k = 0;
+        while k + 1 < edges.len() {
+            if edges[k].0 == edges[k + 1].0 && across[k] != NONE {
+                twin[position[k] as usize] = position[k + 1];
+                twin[position[k + 1] as usize] = position[k];
+                k += 2;
+            } else {
+                k += 1;
+            }
+        }
         EdgeCandidates {
             body,
             edges: order.iter().map(|&i| edges[i].1).collect(),
             across: order.iter().map(|&i| across[i]).collect(),
+            twin,
             node_start,
             node_elements,
             first_node: b.nodes.start as u32,
@@ -221,14 +245,7 @@ impl EdgeCandidates {
             .filter(|&k| self.exposed(k, eroded))
             .map(|k| self.edges[k])
             .collect();
-        let mut nodes: Vec<u32> = segments.iter().flat_map(|s| s.nodes).collect();
-        nodes.sort_unstable();
-        nodes.dedup();
-        Surface {
-            body: self.body,
-            nodes,
-            segments,
-        }
+        Surface::of_segments(self.body, segments)
     }
 
     /// The elements of global node `g` (none where `g` is not a node of the body).
@@ -252,6 +269,75 @@ impl EdgeCandidates {
                 !els.is_empty() && els.iter().all(|&e| eroded.get(e as usize) == Some(&true))
             })
             .collect()
+    }
+}
+
+/// The surface and free nodes of an erodible body under a mask that changes a few elements at a
+/// time: [`EdgeCandidates::surface`] and [`EdgeCandidates::free_nodes`] kept up to date by
+/// [`EdgeCandidates::update`] in the size of the change, not of the body.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Exposure {
+    /// The exposed candidates (indices into [`EdgeCandidates::edges`]).
+    exposed: std::collections::BTreeSet<u32>,
+    /// The free nodes (global).
+    free: std::collections::BTreeSet<u32>,
+}
+
+impl EdgeCandidates {
+    /// The exposure under `eroded` (per global element), from scratch.
+    pub fn exposure(&self, eroded: &[bool]) -> Exposure {
+        Exposure {
+            exposed: (0..self.edges.len())
+                .filter(|&k| self.exposed(k, eroded))
+                .map(|k| k as u32)
+                .collect(),
+            free: self.free_nodes(eroded).into_iter().collect(),
+        }
+    }
+
+    /// Brings `x` to `eroded` after the elements `changed` (global; those of other bodies are
+    /// passed over) changed their flag: their edges and the twins of them are masked again,
+    /// their nodes (corners `quads`) checked for freedom again.
+    pub fn update(&self, x: &mut Exposure, changed: &[u32], eroded: &[bool], quads: &[[u32; 4]]) {
+        for &e in changed {
+            let from = self.edges.partition_point(|s| s.element < e);
+            let to = self.edges.partition_point(|s| s.element <= e);
+            for k in from..to {
+                for j in [k as u32, self.twin[k]] {
+                    if j == NONE {
+                        continue;
+                    }
+                    if self.exposed(j as usize, eroded) {
+                        x.exposed.insert(j);
+                    } else {
+                        x.exposed.remove(&j);
+                    }
+                }
+            }
+            if from == to && self.elements_of(quads[e as usize][0]).is_empty() {
+                // Not an element of this body.
+                continue;
+            }
+            for &g in &quads[e as usize] {
+                let els = self.elements_of(g);
+                if !els.is_empty() && els.iter().all(|&f| eroded.get(f as usize) == Some(&true)) {
+                    x.free.insert(g);
+                } else {
+                    x.free.remove(&g);
+                }
+            }
+        }
+    }
+
+    /// The surface of `x`: as [`EdgeCandidates::surface`] under its mask.
+    pub fn surface_of(&self, x: &Exposure) -> Surface {
+        let segments = x.exposed.iter().map(|&k| self.edges[k as usize]).collect();
+        Surface::of_segments(self.body, segments)
+    }
+
+    /// The free nodes of `x` (ascending): as [`EdgeCandidates::free_nodes`].
+    pub fn free_of(&self, x: &Exposure) -> Vec<u32> {
+        x.free.iter().copied().collect()
     }
 }
 

@@ -253,6 +253,9 @@ fn two_body_group_self_contact_and_walls_follow_erosion() {
         // by entry, are those laid out from scratch after each pattern below.
         let mut lists = masked.tables(&fresh_set).unwrap();
         let mut on = masked.laid_out(&fresh_set).unwrap();
+        // One set following every pattern below in turn (flags flip both ways): its surfaces
+        // brought up to date from the last follow's are those of a follow from the first build.
+        let mut following = fresh_set.clone();
         let striker = model.bodies[2].elements.clone();
         for (k, p) in [0.1, 0.3, 0.6, 1.0].iter().enumerate() {
             for seed in 0..4 {
@@ -265,6 +268,11 @@ fn two_body_group_self_contact_and_walls_follow_erosion() {
                 assert!(set.follow_erosion(&model, &eroded));
                 let got = sides(&set);
                 assert_eq!(got, expected(&model, &fresh, &eroded), "{contacts}");
+                assert!(following.follow_erosion(&model, &eroded));
+                let (now, want) = (following.tables(), set.tables());
+                assert_eq!(now.slots, want.slots, "{contacts}");
+                assert_eq!(now.segments, want.segments, "{contacts}");
+                assert_eq!(following.penalty_step(), set.penalty_step());
                 assert_masked_as_followed(&masked, &set, &got);
                 let changes = masked.changes(&set, &mut on).unwrap();
                 let whole = masked.tables(&set).unwrap();
