@@ -29,47 +29,6 @@ pub(super) struct Eroding {
     pub on: LaidOut,
 }
 
-/// Writes the entries of `now` that differ from `was` into `buffer` (records of `T` from offset
-/// 0), one write per run of changed entries (runs fewer than 16 entries apart merged), and keeps
-/// `now` in `was`: erosion changes a few entries of lists that hold every candidate. An empty
-/// `was` (the device's content unknown) writes all of `now`.
-fn write_changed<T: Pod + PartialEq>(
-    queue: &wgpu::Queue,
-    buffer: &wgpu::Buffer,
-    was: &mut Vec<T>,
-    now: &[T],
-) {
-    if was.len() != now.len() {
-        queue.write_buffer(buffer, 0, bytemuck::cast_slice(now));
-        *was = now.to_vec();
-        return;
-    }
-    let size = std::mem::size_of::<T>();
-    let mut k = 0;
-    while k < now.len() {
-        if now[k] == was[k] {
-            k += 1;
-            continue;
-        }
-        let start = k;
-        let mut end = k + 1;
-        let mut j = end;
-        while j < now.len() && j < end + 16 {
-            if now[j] != was[j] {
-                end = j + 1;
-            }
-            j += 1;
-        }
-        queue.write_buffer(
-            buffer,
-            (start * size) as u64,
-            bytemuck::cast_slice(&now[start..end]),
-        );
-        was[start..end].copy_from_slice(&now[start..end]);
-        k = end;
-    }
-}
-
 /// Sets the entries `changes` of `was` (the device's list of `T`, records from offset 0 of
 /// `buffer`) and writes those that differ, one write per run of them (runs fewer than 16 entries
 /// apart merged): the work and the bytes are those of the entries that changed, not of the list.
@@ -172,13 +131,13 @@ impl ContactState {
                 .masked
                 .laid_out(&self.set)
                 .ok_or_else(|| unfollowed("lay out"))?;
-            let slots: Vec<GpuSlot> = t.slots.iter().map(GpuSlot::from).collect();
-            let segs: Vec<GpuSegment> = t.segments.iter().map(GpuSegment::from).collect();
-            if let (Some(b), false) = (&b_slots, slots.is_empty()) {
-                write_changed(queue, b, &mut er.slots, &slots);
+            er.slots = t.slots.iter().map(GpuSlot::from).collect();
+            er.segments = t.segments.iter().map(GpuSegment::from).collect();
+            if let (Some(b), false) = (&b_slots, er.slots.is_empty()) {
+                queue.write_buffer(b, 0, bytemuck::cast_slice(&er.slots));
             }
-            if let (Some(b), false) = (&b_segs, segs.is_empty()) {
-                write_changed(queue, b, &mut er.segments, &segs);
+            if let (Some(b), false) = (&b_segs, er.segments.is_empty()) {
+                queue.write_buffer(b, 0, bytemuck::cast_slice(&er.segments));
             }
         }
         // Counters: due = 1 (offset 0).

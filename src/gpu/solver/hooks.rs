@@ -1,9 +1,10 @@
-//! Test hooks of the GPU solver: the contact search's candidates and active slots read back
-//! from the device (checked against the CPU reference's broad phase, `crate::contact::broad`, in
+//! Test hooks of the GPU solver: the contact search's candidates and active slots and the contact
+//! tables read back from the device (checked against the CPU reference's broad phase, `crate::contact::broad`, in
 //! `tests/gpu/general.rs`), the grow events, and the element stage run alone on given nodes
 //! (against [`crate::element::evaluate`] in `tests/gpu.rs`).
 
 use crate::error::{Error, Result};
+use crate::gpu::contact::tables::{GpuSegment, GpuSlot};
 
 use super::GpuSolver;
 
@@ -68,6 +69,27 @@ impl GpuSolver {
         let w: &[u32] = bytemuck::cast_slice(&bytes);
         let count = (w[0] as usize).min(n as usize);
         Ok(w[1..1 + count].to_vec())
+    }
+
+    /// Test hook: the contact slots and segments as the device holds them (the fixed candidate
+    /// lists of an eroding scene under their mask), read back (one extra readback).
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the scene has no contact or the device is lost.
+    pub fn contact_tables(&mut self) -> Result<(Vec<GpuSlot>, Vec<GpuSegment>)> {
+        let Some(c) = self.state.contact.as_ref() else {
+            return Err(Error::Gpu("the scene has no contact".into()));
+        };
+        let (Some(slots), Some(segs)) = (c.binding(7).cloned(), c.binding(8).cloned()) else {
+            return Err(Error::Gpu("contact buffers missing".into()));
+        };
+        let (ns, ng) = (slots.size(), segs.size());
+        let bytes = self.read_copies("tables_readback", &[(&slots, 0, ns), (&segs, 0, ng)])?;
+        let (a, b) = bytes.split_at(ns as usize);
+        Ok((
+            bytemuck::pod_collect_to_vec(a),
+            bytemuck::pod_collect_to_vec(b),
+        ))
     }
 
     /// Kernel test hook: uploads displacements `u` and half-step velocities `v`, runs the element
