@@ -112,6 +112,10 @@ override WG: u32 = 64u;
 @group(0) @binding(11) var<storage, read> failures: array<Failure>;   // per body
 // Per element: (eroded energy, 1 once eroded, Johnson-Cook damage, 1 if eroded about to invert).
 @group(0) @binding(12) var<storage, read_write> erosion: array<vec4<f32>>;
+// The elements eroded since the contact surfaces last followed, in the order they eroded (the
+// host reads the first ctrl.eroded of them instead of every element's flag; one entry, never
+// read, in a scene without contact).
+@group(0) @binding(13) var<storage, read_write> eroded_list: array<u32>;
 //#endif
 
 // Words per element of the dissipative state.
@@ -709,8 +713,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             let half_work = 0.5 * ctrl.dt_prev * (dot(fx, vx) + dot(fy, vy));
             let energy = w * a0t + hg_stored + half_work;
             erosion[e] = vec4<f32>(energy, 1.0, damage, select(select(0.0, 2.0, small_step), 1.0, inverted));
-            // For the contact surfaces to follow (an integer count: no order dependence).
-            atomicAdd(&ctrl.eroded, 1u);
+            // For the contact surfaces to follow (an integer count, and a list whose order the
+            // host does not use: no order dependence).
+            let at = atomicAdd(&ctrl.eroded, 1u);
+            if (at < arrayLength(&eroded_list)) {
+                eroded_list[at] = e;
+            }
             elem_force[4u * e] = vec2<f32>(0.0);
             elem_force[4u * e + 1u] = vec2<f32>(0.0);
             elem_force[4u * e + 2u] = vec2<f32>(0.0);

@@ -87,7 +87,7 @@ fn expected_buffers(plan: &Plan) -> BTreeSet<&'static str> {
         b.extend(CONTACT_INDEX);
     }
     if plan.has(Failure) {
-        b.extend(["body_failure", "element_erosion"]);
+        b.extend(["body_failure", "element_erosion", "element_eroded_list"]);
     }
     b
 }
@@ -114,6 +114,10 @@ fn expected_sizes(plan: &Plan) -> Vec<(&'static str, u64)> {
     }
     if plan.has(Failure) {
         s.push(("element_erosion", 16 * ne));
+        // The list of the elements eroded since the contact surfaces last followed: one entry
+        // in a scene without contact.
+        let listed = if plan.has(Contact) { ne } else { 1 };
+        s.push(("element_eroded_list", 4 * listed));
     }
     s
 }

@@ -66,6 +66,10 @@ pub struct GpuSolver {
     spec_rows: u32,
     /// The step at which the last submission began.
     batch_start: u32,
+    /// Per element whether it has eroded, as the host last read it (a scene with failure and
+    /// contact; empty: not read yet, or a checkpoint restored since), brought up to date at each
+    /// follow from the list of the elements eroded since the one before.
+    eroded: Vec<bool>,
     /// The most steps a submission records while elements erode in a scene with contact: each
     /// erosion stops the submission, and the steps recorded after the stop still cost their
     /// (empty) dispatches, so the cap is twice the steps before the last stop, doubled after
@@ -282,6 +286,7 @@ impl GpuSolver {
             rows_readback,
             spec_rows: 0,
             batch_start: 0,
+            eroded: Vec::new(),
             erosion_cap: MAX_BATCH,
         })
     }
@@ -321,6 +326,8 @@ impl GpuSolver {
         self.dt_estimate = dt_estimate;
         self.counters = counters;
         self.finished = finished;
+        // The device's erosion state was restored: read it whole at the next follow.
+        self.eroded.clear();
     }
 
     /// Gives the contact candidate buffer room for `cap` candidates, if it has not (restoring a
@@ -460,19 +467,34 @@ impl GpuSolver {
     /// penalty springs' step with them), and resumes the step from its contact stage.
     fn contact_follow_erosion(&mut self) -> Result<()> {
         let t0 = std::time::Instant::now();
-        let Some(buf) = self.state.erosion.clone() else {
+        let (Some(buf), Some(list)) = (self.state.erosion.clone(), self.state.eroded_list.clone())
+        else {
             return Err(Error::Gpu("erosion stop without erosion state".into()));
         };
-        let ne = self.state.params.n_elems as u64;
-        let bytes = self.read_copies("erosion_readback", &[(&buf, 0, 16 * ne)])?;
-        let f: &[f32] = bytemuck::cast_slice(&bytes);
-        let eroded: Vec<bool> = (0..ne as usize).map(|e| f[4 * e + 1] != 0.0).collect();
-        self.counters.eroded_elements = eroded.iter().filter(|&&e| e).count() as u64;
+        let ne = self.state.params.n_elems as usize;
+        // The elements eroded since the last follow (`Control::eroded` of them) when the host
+        // knows the flags before them; else every element's flag.
+        let count = self.ctrl.eroded as usize;
+        if self.eroded.len() == ne && count > 0 && 4 * count as u64 <= list.size() {
+            let bytes =
+                self.read_copies("eroded_list_readback", &[(&list, 0, 4 * count as u64)])?;
+            let listed: &[u32] = bytemuck::cast_slice(&bytes);
+            for &e in listed {
+                if let Some(f) = self.eroded.get_mut(e as usize) {
+                    *f = true;
+                }
+            }
+        } else {
+            let bytes = self.read_copies("erosion_readback", &[(&buf, 0, 16 * ne as u64)])?;
+            let f: &[f32] = bytemuck::cast_slice(&bytes);
+            self.eroded = (0..ne).map(|e| f[4 * e + 1] != 0.0).collect();
+        }
+        self.counters.eroded_elements = self.eroded.iter().filter(|&&e| e).count() as u64;
         let queue = &self.ctx.queue;
         let Some(c) = self.state.contact.as_mut() else {
             return Err(Error::Gpu("erosion stop without contact buffers".into()));
         };
-        let penalty = c.follow_erosion(queue, &eroded)?.unwrap_or(0.0) as f32;
+        let penalty = c.follow_erosion(queue, &self.eroded)?.unwrap_or(0.0) as f32;
         if penalty != self.state.params.penalty_dt {
             self.state.params.penalty_dt = penalty;
             if let Some((_, b)) = self.state.buffers.iter().find(|(n, _)| *n == "params") {

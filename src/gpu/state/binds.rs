@@ -71,6 +71,7 @@ impl Binds {
                 (9, b.plastic.as_ref()),
                 (11, b.failures.as_ref()),
                 (12, b.erosion.as_ref()),
+                (13, b.eroded_list.as_ref()),
             ],
         );
         let node = bind(

@@ -81,6 +81,9 @@ pub struct GpuState {
     /// Erosion state per element: (eroded energy, eroded flag, Johnson-Cook damage, 0) (scenes
     /// with failure only).
     pub(crate) erosion: Option<wgpu::Buffer>,
+    /// The elements eroded since the contact surfaces last followed (scenes with failure; one
+    /// entry per element with contact, one in all without).
+    pub(crate) eroded_list: Option<wgpu::Buffer>,
     /// Whether a body's material has Johnson-Cook damage (snapshots carry the damage).
     pub(crate) damage: bool,
     pub(crate) history: wgpu::Buffer,
@@ -119,6 +122,7 @@ struct Buffers {
     plastic: Option<wgpu::Buffer>,
     failures: Option<wgpu::Buffer>,
     erosion: Option<wgpu::Buffer>,
+    eroded_list: Option<wgpu::Buffer>,
     v_prev: wgpu::Buffer,
     u_snap: Option<wgpu::Buffer>,
     curves: Option<wgpu::Buffer>,
@@ -379,6 +383,10 @@ impl GpuState {
                 )
             }),
             erosion: failure.then(|| a.zeroed("element_erosion", 16 * ne as u64, storage)),
+            eroded_list: failure.then(|| {
+                let cap = if plan.has(Stage::Contact) { ne } else { 1 };
+                a.zeroed("element_eroded_list", 4 * cap as u64, storage)
+            }),
             // v^{n-1/2} per node, then the f32 rounding residuals of each node's last velocity
             // update and of its last displacement update (node.wgsl's compensated sums, joined by
             // the contact's corrections), carried to the next step (and in the checkpoint like
@@ -476,6 +484,7 @@ impl GpuState {
             u_snap: b.u_snap,
             plastic: b.plastic,
             erosion: b.erosion,
+            eroded_list: b.eroded_list,
             damage: failure && model.has_damage(),
             history: b.history,
             indirect: b.indirect,
