@@ -199,7 +199,7 @@ pub struct ContactRow {
     /// steps ([`crate::step::Counters::erosion_follows`]).
     pub failure_follows: Option<u64>,
     /// With `--failure`: the host's mean wall time per follow in those steps, in microseconds
-    /// (GPU: the eroded flags' readback, the host's follow and the writes; the forced search
+    /// (GPU: the eroded elements' readback, the host's follow and the writes; the forced search
     /// runs on the device and is in `failure_us_per_step`, not here; 0 without a follow).
     pub failure_follow_us: Option<f64>,
     /// Broad-phase searches during the timed steps with contact.

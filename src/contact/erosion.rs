@@ -19,8 +19,8 @@
 //! that hold every candidate: every node of an erodible body is a slot of each pass and wall it
 //! takes part in, every edge of its elements a segment. A mask marks those that are not on a
 //! surface now. In the step that eroded an element the device stops before its contact stage;
-//! the host follows the erosion on its copy of the set (this function, from the per-element
-//! flags read back), writes the mask with the slaves' neighbours and stiffnesses of the new
+//! the host follows the erosion on its copy of the set (this function, from the flags it keeps,
+//! brought up to date by the list of the elements eroded since the last follow), writes the mask with the slaves' neighbours and stiffnesses of the new
 //! surfaces into the fixed lists (the entries on before or now, [`Masked::changes`], whose result
 //! is [`Masked::tables`]'s: work and bytes in the surfaces' size, not the candidates') and resumes
 //! the step with a search, which skips masked entries. No slot or segment is renumbered, so the constraints' warm starts and

@@ -268,7 +268,7 @@ pub struct Counters {
     /// with failure and contact or walls; 0 otherwise).
     #[serde(default)]
     pub erosion_follows: u64,
-    /// Host wall seconds those follows took: on the GPU the eroded flags read back, the host's
+    /// Host wall seconds those follows took: on the GPU the eroded elements read back, the host's
     /// follow of its copy of the contact set and the writes of the entries that changed (the
     /// forced search and the resumed step run on the device, not counted); on the CPU the
     /// follow ([`crate::contact::ContactSet::follow_erosion`]).

@@ -463,7 +463,8 @@ impl GpuSolver {
     }
 
     /// Elements eroded in a scene with contact and the step stopped before its contact stage:
-    /// reads the eroded flags, moves the contact surfaces onto the edges they expose (and the
+    /// reads the list of the elements eroded since the last follow (every element's flag the
+    /// first time and after a restore), moves the contact surfaces onto the edges they expose (and the
     /// penalty springs' step with them), and resumes the step from its contact stage.
     fn contact_follow_erosion(&mut self) -> Result<()> {
         let t0 = std::time::Instant::now();
