@@ -175,3 +175,38 @@ fn a_gpu_perforation_restored_while_it_erodes_continues_with_the_same_bits_and_t
         + ta.1.iter().zip(&tb.1).filter(|(x, y)| x != y).count();
     assert!(ta == tb, "{differ} slots and segments differ on the device");
 }
+
+/// An eroding contact whose candidate lists are long (every edge of the striker's and the
+/// plate's elements: 39 042 slots and 153 600 segments, at most 1 280 of each on a surface at
+/// once) finds its contacts on the GPU as on the CPU: the striker of `ricochet bench` (n = 80)
+/// with failure (`--failure`), to 1.5 us. With a hash grid of 2^19 buckets (two per
+/// candidate segment, before `gpu::contact::MAX_BUCKETS`) lavapipe found no candidate and the
+/// striker went through the plate at 300 m/s (2026-11-28).
+#[test]
+fn gpu_eroding_contact_with_long_candidate_lists_stops_the_striker_as_the_cpu_does() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let text = ricochet::bench::with_failure(&ricochet::bench::striker_text(80, true), 0.03)
+        .replace("end_time = 2e-5", "end_time = 1.5e-6")
+        .replace("field_interval = 4e-6\n", "");
+    let (scene, model, plan) = load(&text, "striker_80.toml");
+    let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
+    let (cs, _) = run_to_end(&mut cpu);
+    let mut gpu = GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
+    let (gs, _) = run_to_end(&mut gpu);
+    let striker = |s: &Sample| s.body_velocity[0][1];
+    let (c, g) = (cs.last().unwrap(), gs.last().unwrap());
+    let v0 = ricochet::bench::STRIKER_VELOCITY;
+    // The contact has slowed the striker from 300 to about 185 m/s by then on both backends
+    // (-185.14 m/s on the CPU, -185.33 on lavapipe, 21 and 28 elements eroded, 2026-11-28:
+    // erosion is a threshold that f32 crosses a step apart), where without contact it keeps
+    // its 300 m/s: the backends within 0.5 % of v0.
+    assert!(striker(c) > -0.7 * v0, "CPU {} m/s", striker(c));
+    assert!(
+        (striker(g) - striker(c)).abs() < 5e-3 * v0,
+        "GPU {} m/s, CPU {} m/s",
+        striker(g),
+        striker(c)
+    );
+    assert!(g.contact > 0.0 && c.eroded_elements > 0 && g.eroded_elements > 0);
+}

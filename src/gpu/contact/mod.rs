@@ -74,6 +74,13 @@ pub const PART_REPORT: u32 = 16;
 pub const PART_ALL: u32 = 31;
 /// Colours at most (WGSL `MAX_COLORS`).
 pub const MAX_COLORS: u32 = 64;
+/// The most buckets of the search's hash grid (two per segment up to it; more segments share
+/// them, which costs time, never candidates). On lavapipe (Mesa 22.3.6, 2026-11-28) a grid of
+/// 2^19 buckets or more found no candidate at all, whatever the segments (the 10^4 striker with
+/// its grid forced to 2^19: none; the eroding striker of 39 042 slots and 153 600 candidate
+/// segments, 2^19 by the rule: none, its projectile through the plate), while 2^18 found them all;
+/// the cause is not found. Tested in `tests/gpu/erosion_contact.rs`.
+pub const MAX_BUCKETS: u32 = 1 << 18;
 /// Sweep slots of the per-colour path (WGSL `MAX_SWEEP_SLOTS`).
 pub const MAX_SWEEP_SLOTS: u32 = 80;
 /// Threads per workgroup of the per-item kernels (WGSL `CG`).
@@ -480,7 +487,7 @@ impl ContactState {
             multi: u32::from(multi),
             hist_stride,
             row_capacity,
-            n_buckets: (2 * n_segs).max(64).next_power_of_two(),
+            n_buckets: (2 * n_segs).max(64).next_power_of_two().min(MAX_BUCKETS),
             cand_capacity,
             adj_capacity: n_slots + 2 * cand_capacity,
             jp_rounds: FIRST_ROUNDS,
