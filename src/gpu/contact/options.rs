@@ -61,6 +61,14 @@ pub fn one_group(device_type: wgpu::DeviceType) -> u32 {
 // per-item kernels' workgroups of this many threads.
 const _: () = assert!(super::CG == crate::gpu::shader::ITEM_GROUP);
 
+/// The most contact slots or nodes the contact stage takes on a CPU adapter: 2^18. Beyond it
+/// lavapipe's search (Mesa 22.3.6) wrote wrong candidate offsets on 2026-11-28, whatever the
+/// segments: the bench striker with failure (every node of both bodies a slot) found its
+/// candidates at 241 602 slots (n = 200) and lost them at 377 002 (n = 250) and 543 000 (n = 300),
+/// as a hash grid of 2^19 buckets lost them where 2^18 did not ([`super::MAX_BUCKETS`]); the cause
+/// is not found. A scene beyond it is refused on such an adapter rather than run without contact.
+pub const CPU_ADAPTER_SLOTS: usize = 1 << 18;
+
 /// How a scene's contact stage is solved and dispatched.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Path {
@@ -87,6 +95,14 @@ impl Path {
         slots: usize,
         device_type: wgpu::DeviceType,
     ) -> Result<Path> {
+        if device_type == wgpu::DeviceType::Cpu && nodes.max(slots) > CPU_ADAPTER_SLOTS {
+            return Err(Error::Gpu(format!(
+                "the contact has {slots} slots and {nodes} nodes (an eroding body counts every \
+                 node): on a CPU adapter (lavapipe) the contact search loses its candidates \
+                 beyond {CPU_ADAPTER_SLOTS}, and the bodies would pass through each other; run \
+                 this scene with --backend cpu"
+            )));
+        }
         let multi = options
             .multi
             .unwrap_or_else(|| solve::multi_path(slots, device_type));
@@ -109,5 +125,26 @@ impl Path {
             extrapolate: !options.plain_sweeps,
             one,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A contact beyond [`CPU_ADAPTER_SLOTS`] slots or nodes is refused on a CPU adapter (with a
+    /// message naming the CPU backend) and taken on a GPU.
+    #[test]
+    fn a_contact_beyond_the_cpu_adapters_limit_is_refused_there_only() {
+        let o = ContactOptions::default();
+        let (at, over) = (CPU_ADAPTER_SLOTS, CPU_ADAPTER_SLOTS + 1);
+        assert!(Path::choose(&o, at, at, wgpu::DeviceType::Cpu).is_ok());
+        for (nodes, slots) in [(over, 10), (10, over)] {
+            match Path::choose(&o, nodes, slots, wgpu::DeviceType::Cpu) {
+                Err(Error::Gpu(m)) => assert!(m.contains("--backend cpu"), "{m}"),
+                other => panic!("{other:?}"),
+            }
+            assert!(Path::choose(&o, nodes, slots, wgpu::DeviceType::DiscreteGpu).is_ok());
+        }
     }
 }
