@@ -17,6 +17,10 @@ use crate::failure::run_to_end;
 mod perforation;
 use perforation::{deepest_in_remaining, falling_block, perforation};
 
+/// The projectile against the plate in a two-pass Lagrange contact.
+const TWO_PASS: &str =
+    "[[contact]]\nbodies = [\"projectile\", \"plate\"]\nmethod = \"lagrange\"\ntwo_pass = true\n";
+
 /// The samples and snapshots of a run of `text` on the CPU reference, and of two runs on the
 /// GPU of `ctx`.
 #[allow(clippy::type_complexity)]
@@ -43,17 +47,15 @@ fn gpu_perforation_follows_erosion_as_the_cpu_does_and_repeats_bit_for_bit() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     for (contact, own) in [
-        (
-            "[[contact]]\nbodies = [\"projectile\", \"plate\"]\nmethod = \"lagrange\"\ntwo_pass = true\n",
-            false,
-        ),
+        (TWO_PASS, false),
         (
             "[[contact]]\nbodies = \"all\"\nself_contact = true\nmethod = \"lagrange\"\n",
             true,
         ),
     ] {
         // A snapshot at the end (6e-5 s): the nodes and the eroded flags.
-        let text = perforation(400.0, contact).replace("[run]\n", "[run]\nfield_interval = 6.0e-5\n");
+        let text =
+            perforation(400.0, contact).replace("[run]\n", "[run]\nfield_interval = 6.0e-5\n");
         let (name, model, _) = load(&text, "perforation.toml");
         let ((cs, _), [(gs, gsnap), (gs2, gsnap2)]) = both_backends(&ctx, &text);
         // The same bits twice: every history row and the nodes at the end.
@@ -69,7 +71,8 @@ fn gpu_perforation_follows_erosion_as_the_cpu_does_and_repeats_bit_for_bit() {
             .clone()
             .map(|n| model.position[n][1] + end.displacement[n][1])
             .fold(f64::INFINITY, f64::min);
-        let [deepest, own_surface, _] = deepest_in_remaining(&model, &end.displacement, &end.eroded);
+        let [deepest, own_surface, _] =
+            deepest_in_remaining(&model, &end.displacement, &end.eroded);
         let audit = |s: &[Sample]| {
             let mut a = EnergyAudit::default();
             for x in s {
@@ -138,11 +141,7 @@ fn gpu_free_nodes_of_eroded_elements_stop_on_a_rigid_wall_as_on_the_cpu() {
 fn a_gpu_perforation_restored_while_it_erodes_continues_with_the_same_bits_and_tables() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let text = perforation(
-        400.0,
-        "[[contact]]\nbodies = [\"projectile\", \"plate\"]\nmethod = \"lagrange\"\ntwo_pass = true\n",
-    )
-    .replace("end_time = 6.0e-5", "end_time = 5.0e-6");
+    let text = perforation(400.0, TWO_PASS).replace("end_time = 6.0e-5", "end_time = 5.0e-6");
     let (scene, model, plan) = load(&text, "perforation.toml");
     let solver = || GpuSolver::new(ctx.clone(), &model, &plan, schedule(&scene)).expect("gpu");
     let mut a = solver();
@@ -219,13 +218,10 @@ fn gpu_eroding_contact_with_long_candidate_lists_stops_the_striker_as_the_cpu_do
 fn gpu_eroding_contact_on_the_per_colour_and_split_paths_perforates_as_the_cpu_does() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let text = perforation(
-        400.0,
-        "[[contact]]\nbodies = [\"projectile\", \"plate\"]\nmethod = \"lagrange\"\ntwo_pass = true\n",
-    )
-    // To 20 us: the plug has left by 6 us.
-    .replace("end_time = 6.0e-5", "end_time = 2.0e-5")
-    .replace("[run]\n", "[run]\nfield_interval = 2.0e-5\n");
+    let text = perforation(400.0, TWO_PASS)
+        // To 20 us: the plug has left by 6 us.
+        .replace("end_time = 6.0e-5", "end_time = 2.0e-5")
+        .replace("[run]\n", "[run]\nfield_interval = 2.0e-5\n");
     let (scene, model, plan) = load(&text, "perforation.toml");
     let mut cpu = CpuSolver::new(model.clone(), plan.clone(), schedule(&scene));
     let (cs, _) = run_to_end(&mut cpu);
