@@ -76,10 +76,11 @@ struct ContactParams {
     o_lcount: u32,        // slots per colour (MAX_COLORS + 1)
     o_loff: u32,
     o_lcur: u32,
-    o_list: u32,          // slots in colour order
+    o_list: u32,          // slots in colour order (per-colour path); the one-workgroup solve's
+                          // colouring state per slot when it colours through storage
     o_iface: u32,         // first slot of each interface (n_ifaces + 1)
     o_act: u32,           // the step's Lagrange slots by colour (one-workgroup solve)
-    o_mask: u32,          // colours taken per local node (one-workgroup solve's greedy colouring)
+    o_mask: u32,          // per local node: the one-workgroup solve's tie of its references, then its packed index
     f_rf: u32,            // fws offset: friction partials per slot run (with friction)
     one: f32,             // 1.0, unknown to the compiler (report_end's compensated sums)
     n_nodes: u32,         // v_prev[n_nodes + g]: node g's velocity residual (node.wgsl)
@@ -375,4 +376,13 @@ fn pgs_update(k: u32, dt: f32, inv_scale: f32) -> f32 {
         }
     }
     return change;
+}
+
+// A hashed priority of slot k (PCG's output permutation): the order of the colourings, the
+// search's Jones-Plassmann rounds (`contact_search.wgsl`, `outranks`) and the one-workgroup
+// solve's (`contact_solve.wgsl`, `colour_rank`).
+fn priority(k: u32) -> u32 {
+    var x = k * 747796405u + 2891336453u;
+    x = ((x >> ((x >> 28u) + 4u)) ^ x) * 277803737u;
+    return (x >> 22u) ^ x;
 }

@@ -533,12 +533,6 @@ fn adj_sort(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
-fn priority(k: u32) -> u32 {
-    var x = k * 747796405u + 2891336453u;
-    x = ((x >> ((x >> 28u) + 4u)) ^ x) * 277803737u;
-    return (x >> 22u) ^ x;
-}
-
 fn outranks(j: u32, k: u32) -> bool {
     let pj = priority(j);
     let pk = priority(k);

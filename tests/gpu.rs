@@ -1234,6 +1234,8 @@ mod load_curve_scene;
 #[path = "shared/traction.rs"]
 mod traction;
 
+#[path = "gpu/colouring.rs"]
+mod colouring;
 #[path = "gpu/contact.rs"]
 mod contact;
 #[path = "gpu/device.rs"]

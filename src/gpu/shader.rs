@@ -55,22 +55,26 @@ pub struct Features {
     /// (WGSL `CAP`; more take the slower path through storage, with the same result), from the
     /// device's workgroup storage ([`local_constraints`]).
     pub contact_cap: u32,
+    /// Whether the one-workgroup solve colours its constraints in parallel rounds in a hashed
+    /// order (WGSL `PARALLEL_COLOURING`; [`crate::gpu::contact::colouring`]) or greedily in slot
+    /// order in one invocation (CPU adapters: [`crate::gpu::contact::parallel_colouring`]).
+    pub contact_parallel_colouring: bool,
 }
 
 /// Threads per workgroup of the per-item contact kernels (`crate::gpu::contact::CG`).
 pub const ITEM_GROUP: u32 = 64;
 
 /// Lagrange constraints the one-workgroup solve compacts and colours in workgroup memory (WGSL
-/// `CAP`, 28 bytes each) on a device with `storage` bytes of workgroup storage and the
+/// `CAP`, 40 bytes each) on a device with `storage` bytes of workgroup storage and the
 /// one-workgroup kernels at `group` threads: what the other workgroup arrays of the contact
 /// kernels leave (at most 40 bytes per thread of `group`, 16 per thread of the per-item kernels,
-/// and 1 KiB), in multiples of 32, from 32 to 2048. A step with more takes the compaction in
-/// storage, whose greedy loop waits for the memory at every dependent load in one invocation:
-/// on an NVIDIA H200 (2026-11-27, BENCHMARKS.md) the striker's solve took 2.1 x (10^5 elements)
-/// and 2.5 x (10^6) as long that way.
+/// and 1 KiB), in multiples of 32, from 32 to 2048 (the ranks of `contact_solve.wgsl` hold a
+/// constraint's index in 12 bits). A step with more takes the compaction through storage, with
+/// the same colours: its rounds read each constraint's neighbours from the search's node
+/// adjacency in storage, where the workgroup's read keys in its own memory.
 pub fn local_constraints(storage: u32, group: u32) -> u32 {
     let others = 40 * group + 16 * ITEM_GROUP + 1024;
-    (storage.saturating_sub(others) / 28 / 32 * 32).clamp(32, 2048)
+    (storage.saturating_sub(others) / 40 / 32 * 32).clamp(32, 2048)
 }
 
 impl Default for Features {
@@ -95,6 +99,7 @@ impl Default for Features {
                 wgpu::Limits::default().max_compute_workgroup_storage_size,
                 256,
             ),
+            contact_parallel_colouring: true,
         }
     }
 }
@@ -151,6 +156,7 @@ impl Features {
                                         wgpu::Limits::default().max_compute_workgroup_storage_size,
                                         contact_group,
                                     ),
+                                    contact_parallel_colouring: contact_group > 8,
                                 });
                             }
                         }
@@ -210,6 +216,7 @@ pub fn source(kernel: &str, features: Features) -> String {
             for (name, on) in [
                 ("SPRINGS", features.contact_springs),
                 ("FRICTION", features.contact_friction),
+                ("PARALLEL_COLOURING", features.contact_parallel_colouring),
             ] {
                 if t.starts_with(&format!("const {name}: bool = true;")) {
                     out.push_str(&line.replacen("true", if on { "true" } else { "false" }, 1));

@@ -8,7 +8,8 @@
 //!   the device (no readback of the nodes);
 //! - [`narrow`]: each active slot's constraint, the penalty impulses and the Lagrange warm starts;
 //! - [`solve`]: the diagonal-mass Lagrange correction (projected Gauss-Seidel by colours, in one
-//!   workgroup or one dispatch per colour) and the active-set update;
+//!   workgroup or one dispatch per colour) and the active-set update; [`colouring`] the CPU
+//!   reference of the one-workgroup solve's colouring of its constraints;
 //! - [`report`]: corrected velocities, u_{n+1}, the impulses' work and the interface reports;
 //! - [`one`]: on CPU adapters with a small contact set, the stage in two one-workgroup dispatches
 //!   (before and after the search) instead of eight.
@@ -25,6 +26,7 @@
 //! `ContactState::grow` enlarges what is needed and resumes the step. CPU reference:
 //! [`crate::contact::ContactSet::apply`].
 
+pub mod colouring;
 pub mod erosion;
 pub mod kernels;
 pub mod narrow;
@@ -38,7 +40,7 @@ pub mod tables;
 pub use crate::gpu::shader::local_constraints;
 pub use kernels::{stage_source, ContactKernels, MODULES};
 pub(crate) use options::Path;
-pub use options::{one_group, ContactOptions};
+pub use options::{one_group, parallel_colouring, ContactOptions};
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;

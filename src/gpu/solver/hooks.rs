@@ -4,6 +4,8 @@
 //! (against [`crate::element::evaluate`] in `tests/gpu.rs`).
 
 use crate::error::{Error, Result};
+use crate::gpu::contact::colouring::SERIAL;
+use crate::gpu::contact::narrow::CONS_SIZE;
 use crate::gpu::contact::tables::{GpuSegment, GpuSlot};
 
 use super::GpuSolver;
@@ -92,6 +94,65 @@ impl GpuSolver {
         ))
     }
 
+    /// Test hook: the one-workgroup solve's last compaction: its Lagrange constraints in the
+    /// order of their colours ([`LastColouring`]), read back from the device (one extra readback).
+    /// Compare with [`crate::gpu::contact::colouring::colours`].
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the scene has no contact, its solve takes the per-colour path, or the
+    /// device is lost.
+    pub fn contact_last_colouring(&mut self) -> Result<LastColouring> {
+        let Some(c) = self.state.contact.as_ref() else {
+            return Err(Error::Gpu("the scene has no contact".into()));
+        };
+        if c.multi() {
+            return Err(Error::Gpu(
+                "the per-colour path colours in the search".into(),
+            ));
+        }
+        let p = c.params;
+        let (Some(ws), Some(slots), Some(cons)) = (
+            c.binding(13).cloned(),
+            c.binding(7).cloned(),
+            c.binding(11).cloned(),
+        ) else {
+            return Err(Error::Gpu("contact buffers missing".into()));
+        };
+        let n = p.n_slots as u64;
+        let ends = SERIAL as u64 + 2;
+        let (sb, cb) = (slots.size(), cons.size());
+        let bytes = self.read_copies(
+            "colouring_readback",
+            &[
+                (&ws, 4 * p.o_loff as u64, 4 * ends),
+                (&ws, 4 * p.o_act as u64, 4 * n.max(1)),
+                (&slots, 0, sb),
+                (&cons, 0, cb),
+            ],
+        )?;
+        let w: &[u32] = bytemuck::cast_slice(&bytes);
+        let (offsets, rest) = w.split_at(ends as usize);
+        let (act, rest) = rest.split_at(n.max(1) as usize);
+        let (slot_words, cons_words) = rest.split_at((sb / 4) as usize);
+        let table: Vec<GpuSlot> = bytemuck::pod_collect_to_vec(slot_words);
+        let total = (offsets[ends as usize - 1] as usize).min(n as usize);
+        let stride = (CONS_SIZE / 4) as usize;
+        let constraints = act[..total]
+            .iter()
+            .map(|&k| {
+                let at = k as usize * stride;
+                (
+                    k,
+                    [table[k as usize].s, cons_words[at + 1], cons_words[at + 2]],
+                )
+            })
+            .collect();
+        Ok(LastColouring {
+            constraints,
+            offsets: offsets.to_vec(),
+        })
+    }
+
     /// Kernel test hook: uploads displacements `u` and half-step velocities `v`, runs the element
     /// stage once, and returns each element's nodal forces and stable step.
     ///
@@ -131,4 +192,15 @@ impl GpuSolver {
         let dt = (0..n).map(|e| f[8 * n + e] as f64).collect();
         Ok((forces, dt))
     }
+}
+
+/// The one-workgroup solve's last compaction ([`GpuSolver::contact_last_colouring`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LastColouring {
+    /// Its Lagrange constraints by colour, each its slot and its nodes (slave, segment ends;
+    /// `u32::MAX` for a wall's missing segment).
+    pub constraints: Vec<(u32, [u32; 3])>,
+    /// Where each colour starts in `constraints` (colours 0 to 31, then the serial colour), then
+    /// the end: [`SERIAL`] + 2 entries.
+    pub offsets: Vec<u32>,
 }

@@ -13,6 +13,7 @@ mod profile;
 mod readback;
 mod snapshot;
 
+pub use hooks::LastColouring;
 pub use profile::PROFILE_PARTS;
 
 use std::sync::Arc;
@@ -137,6 +138,9 @@ impl GpuSolver {
         let contact_cap = contact
             .compact_local
             .map_or(contact_cap, |c| c.min(contact_cap));
+        let contact_parallel_colouring = contact
+            .parallel_colouring
+            .unwrap_or_else(|| super::contact::parallel_colouring(ctx.info.device_type));
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -164,6 +168,7 @@ impl GpuSolver {
             reduce_group: if cpu_adapter { 64 } else { 256 },
             contact_group,
             contact_cap,
+            contact_parallel_colouring,
         };
         if !(8..=256).contains(&features.contact_group) || !features.contact_group.is_power_of_two()
         {
