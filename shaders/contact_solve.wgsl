@@ -238,6 +238,7 @@ fn compact_local(l: u32, na: u32) {
     for (var r = l; r < nr; r += SG) {
         atomicStore(&sh_key[r], 0u);
     }
+    workgroupBarrier();
     if (!PARALLEL_COLOURING) {
         // Greedy in slot order, in invocation 0.
         if (l == 0u) {

@@ -10,7 +10,8 @@ use ricochet::gpu::contact::ContactOptions;
 
 /// The striker into its plate (two-pass Lagrange constraints on two meshes, hundreds a step),
 /// with either colouring, its compaction in workgroup memory at the device's bound and at 8
-/// constraints (so that its larger steps go through storage) and through storage alone: every 10
+/// constraints (so that its larger steps go through storage), through storage alone, and with
+/// the one-workgroup kernels at 64 threads: every 10
 /// steps the last compaction's constraints are grouped by the colours the reference gives (the
 /// greedy colouring in the hashed order of their slots, or in slot order), in slot order within
 /// a colour, and no two of a colour share a node.
@@ -19,14 +20,20 @@ fn gpu_colouring_of_the_one_workgroup_solve_is_its_cpu_reference() {
     let Some(ctx) = context() else { return };
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let text = asset("stress/striker_plate_gpu_energy.toml");
-    for (parallel, local) in [None, Some(8), Some(0)]
-        .into_iter()
-        .flat_map(|l| [(true, l), (false, l)])
-    {
+    // (The adapter's workgroup, and 64 threads: on lavapipe a workgroup of 8 runs in lock step,
+    // which hides a missing barrier.)
+    let sizes = [
+        (None, None),
+        (Some(8), None),
+        (Some(0), None),
+        (None, Some(64)),
+    ];
+    for (parallel, (local, group)) in sizes.into_iter().flat_map(|s| [(true, s), (false, s)]) {
         let (scene, model, plan) = load(&text, "colouring");
         let options = ContactOptions {
             multi: Some(false),
             compact_local: local,
+            group,
             parallel_colouring: Some(parallel),
             ..ContactOptions::default()
         };
@@ -79,8 +86,9 @@ fn gpu_colouring_of_the_one_workgroup_solve_is_its_cpu_reference() {
             largest = largest.max(n);
         }
         println!(
-            "parallel {parallel}, compaction in workgroup memory up to {local:?}: {checked} \
-             constraints checked, at most {largest} in a compaction, {most_colours} colours"
+            "parallel {parallel}, compaction in workgroup memory up to {local:?}, group \
+             {group:?}: {checked} constraints checked, at most {largest} in a compaction, \
+             {most_colours} colours"
         );
         assert!(
             largest > 8,
