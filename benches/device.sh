@@ -18,6 +18,10 @@
 #               (`--failure`: elements erode at a principal strain of 0.03 from about step 60,
 #               about one a step, and the contact surfaces follow them): 100 warm-up steps, 200
 #               timed in 3 rounds                                                 -> bench_erosion.json
+#   7. colouring the profile of the striker at 10^5 and 10^6 with the one-workgroup solve's
+#               colouring greedy in slot order, in one invocation (`--colouring serial`, the
+#               colouring before 2026-11-28), beside step 5's parallel rounds in a hashed order:
+#               its table in device.log only (a ninth file would not come back)     -> device.log
 # The JSON files are the binary's own (`ricochet bench --json`, `--probe`, `--profile`). With them,
 # meta.json (date, commit, the binary's version, adapter, driver, nvidia-smi, each step's command,
 # status, exit code and seconds, the steps skipped) and device.log (all that was printed) go to
@@ -62,7 +66,8 @@
 #            contact surfaces (lavapipe, 2026-11-28: 1.7 ms of host time a follow at 10^4, and
 #            15 ms a step in all with the forced searches). If a follow took 20 ms at 10^5, the
 #            variant would take about 7 s there: 15-30 s with the models                    [90 s]
-# About 3-3.5 minutes in all; the caps and the default budget (450 s) keep the call inside the
+#   colouring 800 steps each of the striker at 10^5 and 10^6, two models: about 20 s   [60 s]
+# About 3.5-4 minutes in all; the caps and the default budget (450 s) keep the call inside the
 # device tool's 8 minutes for the script (10 minutes a call) even when a step hangs.
 set -uo pipefail
 export LC_ALL=C
@@ -150,7 +155,7 @@ write_meta() {
 }
 
 # run_step NAME MIN_S CAP_S FILE COMMAND...: runs COMMAND --json DIR/FILE under timeout, its output
-# printed and logged, and records it in meta.json.
+# printed and logged, and records it in meta.json. FILE "-": no --json, the output alone.
 run_step() {
   local name=$1 need=$2 cap=$3 file=$4
   shift 4
@@ -163,10 +168,15 @@ run_step() {
     # Room for timeout's 5 s between TERM and KILL.
     limit=$((cap < left - 5 ? cap : left - 5))
     ((limit < 1)) && limit=1
-    say "$name: $* --json $file (at most $limit s)"
     local t0
     t0=$(date +%s%3N)
-    timeout -k 5 "$limit" "$@" --json "$DIR/$file" 2>&1 | tee -a "$DIR/device.log"
+    if [ "$file" = - ]; then
+      say "$name: $* (at most $limit s)"
+      timeout -k 5 "$limit" "$@" 2>&1 | tee -a "$DIR/device.log"
+    else
+      say "$name: $* --json $file (at most $limit s)"
+      timeout -k 5 "$limit" "$@" --json "$DIR/$file" 2>&1 | tee -a "$DIR/device.log"
+    fi
     rc=${PIPESTATUS[0]}
     ms=$(($(date +%s%3N) - t0))
     case $rc in
@@ -178,12 +188,13 @@ run_step() {
   fi
   if [ "$status" != ok ]; then
     FAILED=1
-    rm -f "$DIR/$file"
+    [ "$file" = - ] || rm -f "$DIR/$file"
   fi
   [ -n "$STEPS_JSON" ] && STEPS_JSON+=","
   STEPS_JSON+=$(printf '\n    {"name": %s, "status": %s, "exit": %s, "seconds": %.1f, "limit_s": %d, "file": %s, "command": %s}' \
     "$(json_str "$name")" "$(json_str "$status")" "$rc" "${ms}e-3" "$limit" \
-    "$([ "$status" = ok ] && json_str "$file" || echo null)" "$(json_str "$* --json $file")")
+    "$([ "$status" = ok ] && [ "$file" != - ] && json_str "$file" || echo null)" \
+    "$(json_str "$*$([ "$file" = - ] || echo " --json $file")")")
   write_meta
 }
 
@@ -199,7 +210,8 @@ if [ "$SMALL" = 1 ]; then
   PROFILE=(--scene striker --warmup 10 --steps 10)
   EROSION=(400)
   FAILURE=(--warmup 10 --steps 20 --rounds 2)
-  NEED=(5 5 5 5 5 5)
+  COLOURING=(--scene striker --elements 400 --warmup 10 --steps 10)
+  NEED=(5 5 5 5 5 5 5)
 else
   PROBE=(--probe-mib 512 --probe-dispatches 1000 --rounds 10)
   CELLS=(316 1000)
@@ -210,7 +222,8 @@ else
   PROFILE=(--scene block striker pile --cells 316 1000 --warmup 600 --steps 200)
   EROSION=(10000 100000)
   FAILURE=(--warmup 100 --steps 200 --rounds 3)
-  NEED=(10 30 30 40 60 20)
+  COLOURING=(--scene striker --elements 100000 1000000 --warmup 600 --steps 200)
+  NEED=(10 30 30 40 60 20 20)
 fi
 
 say "device check: $BIN ($VERSION, commit $COMMIT) into $OUT_DIR, budget $BUDGET s"
@@ -246,6 +259,8 @@ run_step profile "${NEED[4]}" 180 profile.json \
   "$BIN" bench --profile --elements "${ELEMENTS[@]}" "${PROFILE[@]}"
 run_step erosion "${NEED[5]}" 90 bench_erosion.json \
   "$BIN" bench --backend gpu --scene striker --elements "${EROSION[@]}" "${FAILURE[@]}" --failure
+run_step colouring "${NEED[6]}" 60 - \
+  "$BIN" bench --profile "${COLOURING[@]}" --colouring serial
 
 say "done: $DIR ($([ "$FAILED" = 0 ] && echo "every step ran" || echo "see meta.json: not every step ran"))"
 [ "$FAILED" = 0 ] || exit 3

@@ -37,6 +37,9 @@ pub struct ContactTiming {
     /// Plain projected Gauss-Seidel sweeps instead of the extrapolated ones, on both backends
     /// ([`crate::contact::extrapolation`]): a comparison.
     pub plain_sweeps: bool,
+    /// How the GPU's one-workgroup solve colours its constraints (`None`: the adapter's default,
+    /// [`crate::gpu::contact::parallel_colouring`]): a comparison.
+    pub parallel_colouring: Option<bool>,
 }
 
 /// Warm-up steps of a contact row unless asked for more: two, the first search included.
@@ -277,6 +280,7 @@ fn gpu_solvers(
     let pile = timing.pile;
     let options = crate::gpu::contact::ContactOptions {
         plain_sweeps: timing.plain_sweeps,
+        parallel_colouring: timing.parallel_colouring,
         ..Default::default()
     };
     let solver = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
@@ -388,6 +392,7 @@ mod tests {
             friction,
             failure: None,
             plain_sweeps: false,
+            parallel_colouring: None,
         }
     }
 

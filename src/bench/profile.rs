@@ -97,8 +97,8 @@ pub fn no_timestamps(ctx: &GpuContext) -> String {
     )
 }
 
-/// Profiles `which` of `size` on `ctx`: `warmup` steps (at least 2, the first search), then
-/// `steps` profiled steps. `None` when the adapter has no timestamp queries.
+/// Profiles `which` of `size` on `ctx` with the contact `options`: `warmup` steps (at least 2, the
+/// first search), then `steps` profiled steps. `None` when the adapter has no timestamp queries.
 ///
 /// # Errors
 /// Scene or device errors.
@@ -106,8 +106,8 @@ pub fn profile(
     ctx: Arc<GpuContext>,
     which: ProfileScene,
     size: usize,
-    warmup: u64,
-    steps: u64,
+    (warmup, steps): (u64, u64),
+    options: crate::gpu::contact::ContactOptions,
 ) -> Result<Option<ProfileRow>> {
     if !ctx.timestamps {
         return Ok(None);
@@ -122,7 +122,7 @@ pub fn profile(
             contact_build(c, size, true, PileContact::All, Default::default())?
         }
     };
-    let mut solver = GpuSolver::new(ctx.clone(), &model, &plan, schedule)?;
+    let mut solver = GpuSolver::with_options(ctx.clone(), &model, &plan, schedule, None, options)?;
     solver.run_steps(warmup.max(2))?;
     let before = solver.counters().contact_searches;
     let Some((taken, seconds)) = solver.profile_steps(steps)? else {

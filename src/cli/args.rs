@@ -153,6 +153,11 @@ pub struct BenchArgs {
     /// extrapolated ones (both backends): a comparison.
     #[arg(long)]
     pub plain_sweeps: bool,
+    /// How the GPU's one-workgroup contact solve colours its constraints (default: in parallel
+    /// rounds on GPUs, in slot order on CPU adapters; `ricochet::gpu::contact::parallel_colouring`):
+    /// a comparison, for the tables and --profile.
+    #[arg(long, value_enum)]
+    pub colouring: Option<BenchColouring>,
     /// Also write the table(s) as JSON: the block rows as an array; with a contact scene,
     /// an object {"block": [...], "contact": [...]}; with --probe or --profile, its report.
     #[arg(long)]
@@ -315,6 +320,15 @@ pub enum BenchScene {
     Pile,
     /// All of the above.
     All,
+}
+
+/// `bench --colouring`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchColouring {
+    /// Greedy in slot order, in one invocation (the CPU adapters' default).
+    Serial,
+    /// Greedy in a hashed order, in parallel Jones-Plassmann rounds (the GPUs' default).
+    Parallel,
 }
 
 /// `plot --format`.

@@ -19,7 +19,7 @@ use ricochet::bench::{
 use ricochet::gpu::GpuContext;
 use ricochet::scene::Scene;
 
-use super::args::{BenchArgs, BenchBackend, BenchScene};
+use super::args::{BenchArgs, BenchBackend, BenchColouring, BenchScene};
 
 /// The options of `ricochet bench` for the device check (`benches/device.sh`).
 #[derive(Args)]
@@ -56,10 +56,12 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         rounds,
         warmup,
         plain_sweeps,
+        colouring,
         json,
         adapter,
         device,
     } = args;
+    let parallel_colouring = colouring.map(|c| c == BenchColouring::Parallel);
     if rounds == 0 || steps == 0 {
         anyhow::bail!("--steps and --rounds must be positive");
     }
@@ -116,7 +118,13 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
                     .map(|&c| (ProfileScene::Contact(c), elements.clone())),
             )
             .collect();
-        return profile(&ctx, &scenes, warmup, steps, json.as_deref());
+        return profile(
+            &ctx,
+            &scenes,
+            (warmup, steps),
+            parallel_colouring,
+            json.as_deref(),
+        );
     }
     let ctx = match backend {
         BenchBackend::Cpu => None,
@@ -146,6 +154,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         friction,
         failure,
         plain_sweeps,
+        parallel_colouring,
     };
     let contact_rows = contact_rows(&contact_scenes, &elements, &timing, run_cpu, ctx.as_ref());
     if block {
@@ -314,10 +323,14 @@ fn probe(
 fn profile(
     ctx: &Arc<GpuContext>,
     scenes: &[(ProfileScene, Vec<usize>)],
-    warmup: u64,
-    steps: u64,
+    (warmup, steps): (u64, u64),
+    parallel_colouring: Option<bool>,
     json: Option<&Path>,
 ) -> anyhow::Result<ExitCode> {
+    let options = ricochet::gpu::contact::ContactOptions {
+        parallel_colouring,
+        ..Default::default()
+    };
     let mut report = ProfileReport {
         adapter: ctx.adapter_name(),
         timestamps: ctx.timestamps,
@@ -331,7 +344,8 @@ fn profile(
                     ProfileScene::Block => n,
                     ProfileScene::Contact(c) => c.size_for(n),
                 };
-                match ricochet::bench::profile(ctx.clone(), *which, size, warmup, steps) {
+                match ricochet::bench::profile(ctx.clone(), *which, size, (warmup, steps), options)
+                {
                     Ok(Some(row)) => {
                         eprint!(
                             "{}",

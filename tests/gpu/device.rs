@@ -67,7 +67,8 @@ fn the_profile_times_every_part_or_says_why_not() {
         (ProfileScene::Block, 6),
         (ProfileScene::Contact(ContactScene::Striker), 4),
     ] {
-        let row = ricochet::bench::profile(ctx.clone(), which, size, 30, 12).expect("profile");
+        let row = ricochet::bench::profile(ctx.clone(), which, size, (30, 12), Default::default())
+            .expect("profile");
         let Some(row) = row else {
             assert!(
                 !ctx.timestamps,
@@ -199,12 +200,24 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     let step_names: Vec<&str> = steps.iter().filter_map(|s| s["name"].as_str()).collect();
     assert_eq!(
         step_names,
-        ["probe", "block", "striker", "pile", "profile", "erosion"]
+        [
+            "probe",
+            "block",
+            "striker",
+            "pile",
+            "profile",
+            "erosion",
+            "colouring"
+        ]
     );
     for s in steps {
         assert_eq!(s["status"], "ok", "{s}");
         assert_eq!(s["exit"], 0, "{s}");
     }
+    // The serial colouring's profile: in device.log alone.
+    assert!(steps[6]["file"].is_null());
+    let device_log = std::fs::read_to_string(dir.join("device.log")).expect("device.log");
+    assert!(device_log.contains("--colouring serial"), "{device_log}");
     assert_eq!(get("probe.json")["bandwidth"]["verified"], true);
     let block = get("bench_block.json").as_array().expect("the block rows");
     assert_eq!(block.len(), 1);
@@ -249,7 +262,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     let files = json_files(&dir);
     assert_eq!(files.len(), 1, "meta.json alone");
     let steps = files[0].1["steps"].as_array().expect("steps").clone();
-    assert_eq!(steps.len(), 6);
+    assert_eq!(steps.len(), 7);
     assert!(steps
         .iter()
         .all(|s| s["status"] == "skipped" && s["file"].is_null()));
