@@ -174,6 +174,19 @@ fn ref_node(k: u32, t: u32) -> u32 {
     return cons[k].b;
 }
 
+// Constraint j (`compact_local`) takes the first colour free in `used`, its keys' masks, and
+// marks it there.
+fn colour_local(j: u32, used: u32) {
+    let col = first_free(used);
+    for (var t = 0u; t < 3u; t++) {
+        let key = sh_ref[3u * j + t];
+        if (key != NONE) {
+            atomicOr(&sh_key[key], colour_bit(col));
+        }
+    }
+    sh_cr[j] = col;
+}
+
 // Constraint j's rank in workgroup memory (see `colour_rank`; j < CAP <= 2048, so at least
 // 2048: above any colour).
 fn local_rank(j: u32) -> u32 {
@@ -250,14 +263,7 @@ fn compact_local(l: u32, na: u32) {
                         used |= atomicLoad(&sh_key[key]);
                     }
                 }
-                let col = first_free(used);
-                for (var t = 0u; t < 3u; t++) {
-                    let key = sh_ref[3u * j + t];
-                    if (key != NONE) {
-                        atomicOr(&sh_key[key], colour_bit(col));
-                    }
-                }
-                sh_cr[j] = col;
+                colour_local(j, used);
             }
         }
         workgroupBarrier();
@@ -310,14 +316,7 @@ fn compact_local(l: u32, na: u32) {
                 left = 1.0;
                 continue;
             }
-            let col = first_free(used);
-            for (var t = 0u; t < 3u; t++) {
-                let key = sh_ref[3u * j + t];
-                if (key != NONE) {
-                    atomicOr(&sh_key[key], colour_bit(col));
-                }
-            }
-            sh_cr[j] = col;
+            colour_local(j, used);
         }
         if (!any_positive(l, left)) {
             break;
