@@ -131,10 +131,11 @@ fn compact(l: u32) {
     }
     storageBarrier();
     let na = workgroupUniformLoad(&sh_total);
-    let local = na <= CAP;
+    var local = na <= CAP;
     if (local) {
-        compact_local(l, na);
-    } else {
+        local = compact_local(l, na);
+    }
+    if (!local) {
         compact_global(l, na);
     }
     scatter_by_colour(l, na, local);
@@ -148,18 +149,19 @@ fn compact(l: u32) {
     workgroupBarrier();
 }
 
-// Constraints `compact_local` holds in workgroup memory, 40 bytes each (host-set from the
-// device's workgroup storage: crate::gpu::contact::local_constraints).
+// Constraints `compact_local` holds in workgroup memory, 28 bytes each (host-set from the
+// device's workgroup storage: crate::gpu::contact::local_constraints), and their distinct nodes
+// at most NODE_CAP (3 CAP / 2; a two-pass interface has about one node per constraint).
 const CAP: u32 = 1024u;
 const CAP_SIZE: u32 = 1024u;    // CAP, at least 1 (the arrays' size)
+const NODE_CAP: u32 = 3u * CAP / 2u;
 // Per reference 3j + t of constraint j (slave, segment ends): its node (NONE for a wall's
-// missing segment), then the key of that node, its first reference.
+// missing segment), then its node's key: the node's index in the node list ws[o_nlist..].
 var<workgroup> sh_ref: array<u32, 3u * CAP_SIZE>;
-// Per reference: the least reference to the same node; then, per key, the node's colour mask.
+// Per reference: the least reference to the same node; then per key the node's colour mask (at
+// the key) and, in a colouring round, the largest rank of its constraints still uncoloured (at
+// NODE_CAP + the key).
 var<workgroup> sh_key: array<atomic<u32>, 3u * CAP_SIZE>;
-// Per key, in a colouring round: the largest rank of the constraints on the node still
-// uncoloured.
-var<workgroup> sh_top: array<atomic<u32>, 3u * CAP_SIZE>;
 // Per constraint: its rank (`local_rank`, above SERIAL) until coloured, then its colour.
 var<workgroup> sh_cr: array<u32, CAP_SIZE>;
 
@@ -193,15 +195,17 @@ fn local_rank(j: u32) -> u32 {
     return colour_rank(ws[cc.p.o_color + j]) | (0xfffu - j);
 }
 
-// `compact`'s colouring and node list for na <= CAP constraints. Each node's references are first
-// tied together through ws[o_mask + i] (every reference writes its own index there; whichever
-// write stays, all references of the node read the same one, and the least reference to the
-// node, found by an integer atomicMin, does not depend on which), so that the rounds read and
-// write per node in workgroup memory by key: in each, every uncoloured constraint puts its rank
-// on its keys by an integer atomicMax, and one that holds the largest on all of them takes the
-// first colour free in their masks and marks it there (two such constraints share no node). The
-// nodes are listed by a scan over the references that are their node's first.
-fn compact_local(l: u32, na: u32) {
+// `compact`'s colouring and node list for na <= CAP constraints; false, with nothing of it left
+// behind, when they have more than NODE_CAP nodes (then `compact_global`). Each node's references
+// are first tied together through ws[o_mask + i] (every reference writes its own index there;
+// whichever write stays, all references of the node read the same one, and the least reference
+// to the node, found by an integer atomicMin, does not depend on which); the nodes are listed by
+// a scan over the references that are their node's first, and each reference takes its node's
+// place in the list as its key (through ws[o_mask + i] again), so that the colouring reads and
+// writes per node in workgroup memory by key: in each round every uncoloured constraint puts its
+// rank on its keys by an integer atomicMax, and one that holds the largest on all of them takes
+// the first colour free in their masks and marks it there (two such constraints share no node).
+fn compact_local(l: u32, na: u32) -> bool {
     let nr = 3u * na;
     for (var r = l; r < nr; r += SG) {
         let i = ref_node(ws[cc.p.o_color + r / 3u], r % 3u);
@@ -220,7 +224,7 @@ fn compact_local(l: u32, na: u32) {
         }
     }
     workgroupBarrier();
-    // Keys, and the nodes listed by their first reference: each invocation a contiguous chunk.
+    // The nodes listed by their first reference: each invocation a contiguous chunk.
     let chunk = (nr + SG - 1u) / SG;
     let begin = min(l * chunk, nr);
     let end = min(begin + chunk, nr);
@@ -234,22 +238,35 @@ fn compact_local(l: u32, na: u32) {
     var at = workgroup_prefix(l, firsts);
     for (var r = begin; r < end; r++) {
         let i = sh_ref[r];
-        var key = NONE;
-        if (i != NONE) {
-            key = atomicLoad(&sh_key[ws[cc.p.o_mask + i]]);
-            if (key == r) {
-                ws[cc.p.o_nlist + at] = i;
-                at += 1u;
-            }
+        if (i != NONE && atomicLoad(&sh_key[ws[cc.p.o_mask + i]]) == r) {
+            ws[cc.p.o_nlist + at] = i;
+            at += 1u;
         }
-        sh_ref[r] = key;
     }
+    let nn = workgroupUniformLoad(&sh_total);
     if (l == 0u) {
-        sh_nn = sh_total;
+        sh_nn = nn;
     }
+    storageBarrier();
     workgroupBarrier();
+    // Each node's place in the list, through ws[o_mask + i], as its references' key.
+    for (var d = l; d < nn; d += SG) {
+        ws[cc.p.o_mask + ws[cc.p.o_nlist + d]] = select(d, 0u, nn > NODE_CAP);
+    }
+    storageBarrier();
+    workgroupBarrier();
+    if (nn > NODE_CAP) {
+        // (ws[o_mask..] of the listed nodes back to zero, as `compact_global` takes it.)
+        return false;
+    }
     for (var r = l; r < nr; r += SG) {
-        atomicStore(&sh_key[r], 0u);
+        let i = sh_ref[r];
+        if (i != NONE) {
+            sh_ref[r] = ws[cc.p.o_mask + i];
+        }
+    }
+    for (var d = l; d < nn; d += SG) {
+        atomicStore(&sh_key[d], 0u);
     }
     workgroupBarrier();
     if (!PARALLEL_COLOURING) {
@@ -267,7 +284,7 @@ fn compact_local(l: u32, na: u32) {
             }
         }
         workgroupBarrier();
-        return;
+        return true;
     }
     for (var j = l; j < na; j += SG) {
         sh_cr[j] = local_rank(j);
@@ -279,7 +296,7 @@ fn compact_local(l: u32, na: u32) {
                 for (var t = 0u; t < 3u; t++) {
                     let key = sh_ref[3u * j + t];
                     if (key != NONE) {
-                        atomicStore(&sh_top[key], 0u);
+                        atomicStore(&sh_key[NODE_CAP + key], 0u);
                     }
                 }
             }
@@ -291,7 +308,7 @@ fn compact_local(l: u32, na: u32) {
                 for (var t = 0u; t < 3u; t++) {
                     let key = sh_ref[3u * j + t];
                     if (key != NONE) {
-                        atomicMax(&sh_top[key], rank);
+                        atomicMax(&sh_key[NODE_CAP + key], rank);
                     }
                 }
             }
@@ -308,7 +325,7 @@ fn compact_local(l: u32, na: u32) {
             for (var t = 0u; t < 3u; t++) {
                 let key = sh_ref[3u * j + t];
                 if (key != NONE) {
-                    first = first && atomicLoad(&sh_top[key]) == rank;
+                    first = first && atomicLoad(&sh_key[NODE_CAP + key]) == rank;
                     used |= atomicLoad(&sh_key[key]);
                 }
             }
@@ -322,6 +339,7 @@ fn compact_local(l: u32, na: u32) {
             break;
         }
     }
+    return true;
 }
 
 // Whether the constraint of slot k touches node i.

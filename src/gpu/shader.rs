@@ -65,16 +65,17 @@ pub struct Features {
 pub const ITEM_GROUP: u32 = 64;
 
 /// Lagrange constraints the one-workgroup solve compacts and colours in workgroup memory (WGSL
-/// `CAP`, 40 bytes each) on a device with `storage` bytes of workgroup storage and the
-/// one-workgroup kernels at `group` threads: what the other workgroup arrays of the contact
-/// kernels leave (at most 40 bytes per thread of `group`, 16 per thread of the per-item kernels,
-/// and 1 KiB), in multiples of 32, from 32 to 2048 (the ranks of `contact_solve.wgsl` hold a
-/// constraint's index in 12 bits). A step with more takes the compaction through storage, with
-/// the same colours: its rounds read each constraint's neighbours from the search's node
-/// adjacency in storage, where the workgroup's read keys in its own memory.
+/// `CAP`, 28 bytes each, with at most 1.5 `CAP` distinct nodes) on a device with `storage` bytes
+/// of workgroup storage and the one-workgroup kernels at `group` threads: what the other
+/// workgroup arrays of the contact kernels leave (at most 40 bytes per thread of `group`, 16 per
+/// thread of the per-item kernels, and 1 KiB), in multiples of 32, from 32 to 2048 (the ranks of
+/// `contact_solve.wgsl` hold a constraint's index in 12 bits). A step with more takes the
+/// compaction through storage, with the same colours: its rounds read each constraint's
+/// neighbours from the search's node adjacency in storage, where the workgroup's read keys in its
+/// own memory.
 pub fn local_constraints(storage: u32, group: u32) -> u32 {
     let others = 40 * group + 16 * ITEM_GROUP + 1024;
-    (storage.saturating_sub(others) / 40 / 32 * 32).clamp(32, 2048)
+    (storage.saturating_sub(others) / 28 / 32 * 32).clamp(32, 2048)
 }
 
 impl Default for Features {
