@@ -69,7 +69,7 @@ pub const ITEM_GROUP: u32 = 64;
 /// of workgroup storage and the one-workgroup kernels at `group` threads: what the other
 /// workgroup arrays of the contact kernels leave (at most 40 bytes per thread of `group`, 16 per
 /// thread of the per-item kernels, and 1 KiB), in multiples of 32, from 32 to 2048 (the ranks of
-/// `contact_solve.wgsl` hold a constraint's index in 12 bits). A step with more takes the
+/// `contact_colour.wgsl` hold a constraint's index in 12 bits). A step with more takes the
 /// compaction through storage, with the same colours: its rounds read each constraint's
 /// neighbours from the search's node adjacency in storage, where the workgroup's read keys in its
 /// own memory.

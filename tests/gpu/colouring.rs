@@ -1,4 +1,4 @@
-//! The one-workgroup solve's colouring of its Lagrange constraints (`shaders/contact_solve.wgsl`,
+//! The one-workgroup solve's colouring of its Lagrange constraints (`shaders/contact_colour.wgsl`,
 //! `compact`) read back from the device and checked against its CPU reference,
 //! `ricochet::gpu::contact::colouring::colours`: in parallel rounds (GPUs) and in one invocation
 //! (CPU adapters), each in workgroup memory and through storage.

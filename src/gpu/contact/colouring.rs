@@ -1,11 +1,15 @@
-//! CPU reference of the one-workgroup solve's colouring (`shaders/contact_solve.wgsl`,
-//! `compact`): the step's Lagrange constraints coloured greedily in a hashed order of their slots
+//! The one-workgroup solve's compaction and colouring of its constraints on the device
+//! (`shaders/contact_colour.wgsl`, `compact`, compiled into the solve's modules: [`SOURCE`]) and
+//! its CPU reference: the step's Lagrange constraints coloured greedily in a hashed order of their slots
 //! (on GPUs) or in slot order (on CPU adapters), each the first colour that its neighbours (the
 //! constraints sharing a node with it) earlier in that order left free. The device computes the
 //! first in Jones-Plassmann rounds, the second in one invocation, each in workgroup memory or
 //! through storage; `tests/gpu/colouring.rs` compares all four with this.
 
 use std::collections::HashMap;
+
+/// WGSL source (compiled after [`super::narrow::SOURCE`], before [`super::solve::SOURCE`]).
+pub const SOURCE: &str = include_str!("../../../shaders/contact_colour.wgsl");
 
 /// The serial colour (WGSL `SERIAL`): a constraint that finds colours 0 to 31 taken.
 pub const SERIAL: u32 = 32;

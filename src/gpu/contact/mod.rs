@@ -8,8 +8,9 @@
 //!   the device (no readback of the nodes);
 //! - [`narrow`]: each active slot's constraint, the penalty impulses and the Lagrange warm starts;
 //! - [`solve`]: the diagonal-mass Lagrange correction (projected Gauss-Seidel by colours, in one
-//!   workgroup or one dispatch per colour) and the active-set update; [`colouring`] the CPU
-//!   reference of the one-workgroup solve's colouring of its constraints;
+//!   workgroup or one dispatch per colour) and the active-set update; [`colouring`] the
+//!   one-workgroup solve's compaction and colouring of its constraints (a stage file of the
+//!   solve's modules) and their CPU reference;
 //! - [`report`]: corrected velocities, u_{n+1}, the impulses' work and the interface reports;
 //! - [`one`]: on CPU adapters with a small contact set, the stage in two one-workgroup dispatches
 //!   (before and after the search) instead of eight.

@@ -8,11 +8,12 @@
 
 use super::kernels::{module, pipeline, Layouts};
 use super::search::SearchKernels;
-use super::{narrow, report, solve, Dispatch};
+use super::{colouring, narrow, report, solve, Dispatch};
 use crate::gpu::reduce::TREE;
 use crate::gpu::shader::Features;
 
-/// WGSL source (compiled after [`super::narrow::SOURCE`], [`super::solve::SOURCE`], the sum tree
+/// WGSL source (compiled after [`super::narrow::SOURCE`], [`super::colouring::SOURCE`],
+/// [`super::solve::SOURCE`], the sum tree
 /// ([`TREE`]) and [`super::report::SOURCE`]).
 pub const SOURCE: &str = include_str!("../../../shaders/contact_one.wgsl");
 
@@ -20,7 +21,14 @@ pub const SOURCE: &str = include_str!("../../../shaders/contact_one.wgsl");
 /// contact_common.wgsl).
 pub const MODULE: (&str, &[&str]) = (
     "contact_one",
-    &[narrow::SOURCE, solve::SOURCE, TREE, report::SOURCE, SOURCE],
+    &[
+        narrow::SOURCE,
+        colouring::SOURCE,
+        solve::SOURCE,
+        TREE,
+        report::SOURCE,
+        SOURCE,
+    ],
 );
 
 /// Contact nodes up to which a CPU adapter runs the contact stage in one workgroup.

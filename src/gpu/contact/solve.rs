@@ -8,11 +8,14 @@
 use super::kernels::stage_kernels;
 use super::{groups, Dispatch, COLOR_ENTRY, MAX_COLORS, MAX_SWEEP_SLOTS, ROUND_ENTRIES};
 
-/// WGSL source (compiled after [`super::narrow::SOURCE`]).
+/// WGSL source (compiled after [`super::narrow::SOURCE`] and [`super::colouring::SOURCE`]).
 pub const SOURCE: &str = include_str!("../../../shaders/contact_solve.wgsl");
 
 /// The solve's shader module: its label and stage files (after contact_common.wgsl).
-pub const MODULE: (&str, &[&str]) = ("contact_solve", &[super::narrow::SOURCE, SOURCE]);
+pub const MODULE: (&str, &[&str]) = (
+    "contact_solve",
+    &[super::narrow::SOURCE, super::colouring::SOURCE, SOURCE],
+);
 
 /// Sweeps per solve at most on the device (one-workgroup path), as on the CPU.
 pub const MAX_SWEEPS: u32 = crate::contact::MAX_SWEEPS as u32;
