@@ -40,6 +40,9 @@ pub struct ContactTiming {
     /// How the GPU's one-workgroup solve colours its constraints (`None`: the adapter's default,
     /// [`crate::gpu::contact::parallel_colouring`]): a comparison.
     pub parallel_colouring: Option<bool>,
+    /// Whether the GPU records each batch while the device runs the one before (the default;
+    /// [`GpuSolver::set_record_ahead`]), or only after its readback: a comparison.
+    pub record_ahead: bool,
 }
 
 /// Warm-up steps of a contact row unless asked for more: two, the first search included.
@@ -192,6 +195,8 @@ fn contact_rows(
             searches_per_100_steps: 100.0 * searches as f64 / total as f64,
             bytes_read_back_per_step: (after.bytes_read_back - before[k].bytes_read_back) as f64
                 / total as f64,
+            record_us_per_step: 1e6 * (after.record_seconds - before[k].record_seconds)
+                / total as f64,
             vs_cpu,
         });
     }
@@ -284,7 +289,9 @@ fn gpu_solvers(
         ..Default::default()
     };
     let solver = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
-        GpuSolver::with_options(ctx.clone(), &m, &p, s, None, options)
+        let mut g = GpuSolver::with_options(ctx.clone(), &m, &p, s, None, options)?;
+        g.set_record_ahead(timing.record_ahead);
+        Ok::<_, crate::Error>(g)
     };
     let none = Variant::default();
     let (model, plan, schedule) = contact_build(which, size, true, pile, none)?;
@@ -393,6 +400,7 @@ mod tests {
             failure: None,
             plain_sweeps: false,
             parallel_colouring: None,
+            record_ahead: true,
         }
     }
 

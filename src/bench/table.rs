@@ -208,6 +208,10 @@ pub struct ContactRow {
     pub searches_per_100_steps: f64,
     /// Bytes read back from the device per timed step with contact (0 on the CPU).
     pub bytes_read_back_per_step: f64,
+    /// The host's time recording the GPU's batches per timed step with contact, in
+    /// microseconds ([`crate::step::Counters::record_seconds`]; 0 on the CPU). Recorded ahead
+    /// (the default), it overlaps the device's run of the batch before.
+    pub record_us_per_step: f64,
     /// Timed against the CPU reference in the same rounds (`--backend both`): the median over
     /// the rounds of the CPU reference's time for the steps with contact over this backend's,
     /// i.e. this backend's speed as a multiple of the CPU's. `None` on the CPU's own row and
@@ -215,7 +219,8 @@ pub struct ContactRow {
     pub vs_cpu: Option<f64>,
 }
 
-/// Formats contact rows as a table.
+/// Formats contact rows as a table; with a GPU row, the host's time recording its batches per
+/// step ([`ContactRow::record_us_per_step`]).
 /// With `--friction`, three more columns: the steps per second with friction, what friction
 /// adds to a step (microseconds) and its sweeps; with `--failure`, five more: the steps per
 /// second with failure, what it adds to a step, the elements eroded, the follows of erosion in
@@ -237,6 +242,10 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
         "read back [B/st]"
     );
     s.push_str(&format!(" {:>6}", "sweeps"));
+    let gpu = rows.iter().any(|r| r.backend == "gpu");
+    if gpu {
+        s.push_str(&format!(" {:>14}", "record [us/st]"));
+    }
     let versus = rows.iter().any(|r| r.vs_cpu.is_some());
     if versus {
         s.push_str(&format!(" {:>7}", "vs CPU"));
@@ -268,6 +277,9 @@ pub fn contact_table(rows: &[ContactRow]) -> String {
             r.bytes_read_back_per_step
         ));
         s.push_str(&format!(" {:>6.1}", r.sweeps_mean));
+        if gpu {
+            s.push_str(&format!(" {:>14.2}", r.record_us_per_step));
+        }
         if versus {
             match r.vs_cpu {
                 Some(v) => s.push_str(&format!(" {v:>7.2}")),

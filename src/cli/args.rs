@@ -158,6 +158,11 @@ pub struct BenchArgs {
     /// a comparison, for the tables and --profile.
     #[arg(long, value_enum)]
     pub colouring: Option<BenchColouring>,
+    /// Record each GPU batch of steps only after the readback of the one before, instead of
+    /// while the device runs it (`GpuSolver::set_record_ahead`): a comparison for the contact
+    /// scenes' tables.
+    #[arg(long)]
+    pub no_record_ahead: bool,
     /// Also write the table(s) as JSON: the block rows as an array; with a contact scene,
     /// an object {"block": [...], "contact": [...]}; with --probe or --profile, its report.
     #[arg(long)]

@@ -57,6 +57,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         warmup,
         plain_sweeps,
         colouring,
+        no_record_ahead,
         json,
         adapter,
         device,
@@ -155,6 +156,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         failure,
         plain_sweeps,
         parallel_colouring,
+        record_ahead: !no_record_ahead,
     };
     let contact_rows = contact_rows(&contact_scenes, &elements, &timing, run_cpu, ctx.as_ref());
     if block {

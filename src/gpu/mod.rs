@@ -32,4 +32,4 @@ pub mod solver;
 pub mod state;
 
 pub use context::{GpuContext, KernelCache, KernelKey};
-pub use solver::GpuSolver;
+pub use solver::{AheadCounts, GpuSolver};

@@ -274,6 +274,11 @@ pub struct Counters {
     /// follow ([`crate::contact::ContactSet::follow_erosion`]).
     #[serde(default)]
     pub erosion_follow_seconds: f64,
+    /// GPU: host wall seconds spent recording batches of steps into command buffers (wgpu's
+    /// encoding and `finish`), whether recorded ahead while the device ran the batch before or
+    /// at the submission ([`crate::gpu::GpuSolver::set_record_ahead`]); 0 on the CPU.
+    #[serde(default)]
+    pub record_seconds: f64,
 }
 
 /// A time integrator of a model: the CPU reference or the GPU backend.

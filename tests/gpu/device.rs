@@ -207,7 +207,8 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
             "pile",
             "profile",
             "erosion",
-            "colouring"
+            "colouring",
+            "ahead"
         ]
     );
     for s in steps {
@@ -218,6 +219,9 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     assert!(steps[6]["file"].is_null());
     let device_log = std::fs::read_to_string(dir.join("device.log")).expect("device.log");
     assert!(device_log.contains("--colouring serial"), "{device_log}");
+    // The batches recorded after each readback: in device.log alone.
+    assert!(steps[7]["file"].is_null());
+    assert!(device_log.contains("--no-record-ahead"), "{device_log}");
     assert_eq!(get("probe.json")["bandwidth"]["verified"], true);
     let block = get("bench_block.json").as_array().expect("the block rows");
     assert_eq!(block.len(), 1);
@@ -262,7 +266,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     let files = json_files(&dir);
     assert_eq!(files.len(), 1, "meta.json alone");
     let steps = files[0].1["steps"].as_array().expect("steps").clone();
-    assert_eq!(steps.len(), 7);
+    assert_eq!(steps.len(), 8);
     assert!(steps
         .iter()
         .all(|s| s["status"] == "skipped" && s["file"].is_null()));

@@ -12,9 +12,11 @@ mod hooks;
 mod profile;
 mod readback;
 mod snapshot;
+mod submit;
 
 pub use hooks::LastColouring;
 pub use profile::PROFILE_PARTS;
+pub use submit::AheadCounts;
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -33,6 +35,7 @@ use super::kernels::{Features, Kernels};
 use super::layout::*;
 use super::state::{GpuState, MAX_BATCH};
 use failure::Names;
+use submit::RecordedAhead;
 
 /// One 2-vector per node.
 pub type NodalField = Vec<[f64; 2]>;
@@ -76,6 +79,12 @@ pub struct GpuSolver {
     /// (empty) dispatches, so the cap is twice the steps before the last stop, doubled after
     /// each submission without one, up to [`MAX_BATCH`].
     erosion_cap: u32,
+    /// Whether the next batch is recorded while the device runs this one (`submit.rs`).
+    record_ahead: bool,
+    /// The batch recorded ahead, if any.
+    prepared: Option<RecordedAhead>,
+    /// How the batches recorded ahead were used.
+    ahead: AheadCounts,
 }
 
 /// History rows copied with each submission, so that the usual batch (one sample) needs one
@@ -293,6 +302,9 @@ impl GpuSolver {
             batch_start: 0,
             eroded: Vec::new(),
             erosion_cap: MAX_BATCH,
+            record_ahead: true,
+            prepared: None,
+            ahead: AheadCounts::default(),
         })
     }
 
@@ -302,6 +314,7 @@ impl GpuSolver {
     }
 
     pub(crate) fn state_mut(&mut self) -> &mut GpuState {
+        self.drop_recorded_ahead();
         &mut self.state
     }
 
@@ -326,6 +339,7 @@ impl GpuSolver {
         counters: Counters,
         finished: bool,
     ) {
+        self.drop_recorded_ahead();
         self.ctrl = ctrl;
         self.rows_read = rows_read;
         self.dt_estimate = dt_estimate;
@@ -338,6 +352,7 @@ impl GpuSolver {
     /// Gives the contact candidate buffer room for `cap` candidates, if it has not (restoring a
     /// checkpoint of a run whose buffer grew).
     pub(crate) fn resize_contact_candidates(&mut self, cap: u32) -> Result<()> {
+        self.drop_recorded_ahead();
         let device = &self.ctx.device;
         if let (Some(c), Some(k)) = (self.state.contact.as_mut(), self.kernels.contact.as_ref()) {
             if c.params.cand_capacity != cap {
@@ -377,84 +392,10 @@ impl GpuSolver {
             .min(self.erosion_cap)
     }
 
-    /// History rows a batch of `steps` steps is expected to write (at most [`SPEC_ROWS`]): one
-    /// per history time it may reach (with half the batch again of slack), the first step's and
-    /// the end's.
-    fn expected_rows(&self, steps: u32) -> u32 {
-        let s = &self.schedule;
-        let t = self.time_of(&self.ctrl);
-        let reach = t + 1.5 * steps as f64 * self.dt_estimate;
-        let mut n = ((reach / s.history_interval).floor() - (t / s.history_interval).floor())
-            .clamp(0.0, SPEC_ROWS as f64) as u32;
-        if self.ctrl.step == 0 {
-            n += 1;
-        }
-        if reach >= s.end_time {
-            n += 1;
-        }
-        n.min(steps).min(SPEC_ROWS)
-    }
-
-    /// Records `steps` steps in one submission, with a copy of the control block and history
-    /// into the readback buffer at the end.
-    pub fn submit(&mut self, steps: u32) {
-        self.batch_start = self.ctrl.step;
-        let enc = self.encode_pass("steps", |pass| {
-            for _ in 0..steps {
-                self.state.record_step(&self.kernels, pass);
-            }
-        });
-        self.finish_submission(enc, steps);
-    }
-
-    /// A command encoder with one compute pass labelled `label`, recorded by `record`.
-    fn encode_pass(
-        &self,
-        label: &str,
-        record: impl FnOnce(&mut wgpu::ComputePass<'_>),
-    ) -> wgpu::CommandEncoder {
-        let mut enc = self
-            .ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(label),
-                timestamp_writes: None,
-            });
-            record(&mut pass);
-        }
-        enc
-    }
-
-    /// Ends a submission of `steps` steps recorded into `enc`: the copies of the control block,
-    /// the history rows and the contact counters into the readback buffers, then submits.
-    fn finish_submission(&mut self, mut enc: wgpu::CommandEncoder, steps: u32) {
-        enc.copy_buffer_to_buffer(
-            &self.state.ctrl,
-            0,
-            &self.readback,
-            0,
-            std::mem::size_of::<Control>() as u64,
-        );
-        self.spec_rows = self.expected_rows(steps);
-        self.copy_rows(&mut enc, self.spec_rows as usize);
-        if let Some(c) = &self.state.contact {
-            enc.copy_buffer_to_buffer(
-                &c.ctl,
-                super::contact::PARAMS_SIZE,
-                &self.readback,
-                self.counters_at,
-                std::mem::size_of::<ContactCounters>() as u64,
-            );
-        }
-        self.ctx.queue.submit([enc.finish()]);
-        self.counters.submissions += 1;
-    }
-
     /// A contact search stopped the step because a contact buffer is too small: grows it (from
     /// the counters just read back) and resumes the step from its contact stage.
     fn contact_grow(&mut self) -> Result<()> {
+        self.drop_recorded_ahead();
         let device = &self.ctx.device;
         let (Some(c), Some(k)) = (self.state.contact.as_mut(), self.kernels.contact.as_ref())
         else {
@@ -472,6 +413,7 @@ impl GpuSolver {
     /// first time and after a restore), moves the contact surfaces onto the edges they expose (and the
     /// penalty springs' step with them), and resumes the step from its contact stage.
     fn contact_follow_erosion(&mut self) -> Result<()> {
+        self.drop_recorded_ahead();
         let t0 = std::time::Instant::now();
         let (Some(buf), Some(list)) = (self.state.erosion.clone(), self.state.eroded_list.clone())
         else {
@@ -526,6 +468,7 @@ impl GpuSolver {
 
     /// Resumes a step that a contact stop interrupted, from its contact stage.
     fn resume_step(&mut self) {
+        self.drop_recorded_ahead();
         self.ctx.queue.write_buffer(
             &self.state.ctrl,
             CONTROL_STATE_OFFSET,
