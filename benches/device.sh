@@ -26,6 +26,10 @@
 #               steps recorded only after the readback of the one before (`--no-record-ahead`,
 #               the host's way before 2026-11-28), beside steps 3 and 4, where it is recorded while
 #               the device runs the one before: its table in device.log only      -> device.log
+#   9. search   the profile of the striker at 10^4 and 10^5 with the contact search in its
+#               eleven per-item kernels (`--search items`, the search before 2026-11-28), beside
+#               step 5's search in one workgroup (the GPUs' default up to 4 096 contact nodes
+#               and slots): its table in device.log only                          -> device.log
 # The JSON files are the binary's own (`ricochet bench --json`, `--probe`, `--profile`). With them,
 # meta.json (date, commit, the binary's version, adapter, driver, nvidia-smi, each step's command,
 # status, exit code and seconds, the steps skipped) and device.log (all that was printed) go to
@@ -72,6 +76,7 @@
 #            variant would take about 7 s there: 15-30 s with the models                    [90 s]
 #   colouring 800 steps each of the striker at 10^5 and 10^6, two models: about 20 s   [60 s]
 #   ahead    the striker and the pile at 10^4 and 10^5 as in steps 3 and 4: about 20 s  [90 s]
+#   search   800 steps each of the striker at 10^4 and 10^5, two models: about 10 s      [60 s]
 # About 3.5-4 minutes in all; the caps and the default budget (450 s) keep the call inside the
 # device tool's 8 minutes for the script (10 minutes a call) even when a step hangs.
 set -uo pipefail
@@ -217,7 +222,8 @@ if [ "$SMALL" = 1 ]; then
   FAILURE=(--warmup 10 --steps 20 --rounds 2)
   COLOURING=(--scene striker --elements 400 --warmup 10 --steps 10)
   AHEAD=(--elements 400)
-  NEED=(5 5 5 5 5 5 5 5)
+  SEARCH=(--scene striker --elements 400 --warmup 10 --steps 10)
+  NEED=(5 5 5 5 5 5 5 5 5)
 else
   PROBE=(--probe-mib 512 --probe-dispatches 1000 --rounds 10)
   CELLS=(316 1000)
@@ -230,7 +236,8 @@ else
   FAILURE=(--warmup 100 --steps 200 --rounds 3)
   COLOURING=(--scene striker --elements 100000 1000000 --warmup 600 --steps 200)
   AHEAD=(--elements 10000 100000)
-  NEED=(10 30 30 40 60 20 20 20)
+  SEARCH=(--scene striker --elements 10000 100000 --warmup 600 --steps 200)
+  NEED=(10 30 30 40 60 20 20 20 15)
 fi
 
 say "device check: $BIN ($VERSION, commit $COMMIT) into $OUT_DIR, budget $BUDGET s"
@@ -270,6 +277,8 @@ run_step colouring "${NEED[6]}" 60 - \
   "$BIN" bench --profile "${COLOURING[@]}" --colouring serial
 run_step ahead "${NEED[7]}" 90 - \
   "$BIN" bench --backend gpu --scene striker pile "${AHEAD[@]}" "${CONTACT[@]}" --no-record-ahead
+run_step search "${NEED[8]}" 60 - \
+  "$BIN" bench --profile "${SEARCH[@]}" --search items
 
 say "done: $DIR ($([ "$FAILED" = 0 ] && echo "every step ran" || echo "see meta.json: not every step ran"))"
 [ "$FAILED" = 0 ] || exit 3

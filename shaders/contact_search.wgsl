@@ -178,10 +178,13 @@ fn bucket(c: vec2<i32>) -> u32 {
 // largest side (the cell size); clears the counts; keeps u at the search.
 @compute @workgroup_size(CG)
 fn boxes(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
-    if (!contact_running()) {
-        return;
+    if (contact_running()) {
+        box_item(gid.x);
     }
+}
+
+// `boxes` of item i (segment, bucket, local node, slot and colour count i, those that exist).
+fn box_item(i: u32) {
     if (i < cc.p.n_segs && segs[i].off == 0u) {
         let sg = segs[i];
         let lo = min(min(node_x(sg.a), node_x(sg.b)), min(node_xt(sg.a), node_xt(sg.b)));
@@ -295,6 +298,74 @@ fn seg_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
+// The search in one workgroup (small contact sets; src/gpu/contact/search.rs `search_one_path`):
+// one dispatch, empty on the steps that do not search, where the per-item kernels take eleven
+// (each a barrier and an indirect dispatch even when empty). The SG invocations take each
+// stage's items in turn, the per-item kernels' functions in their order, with a storage barrier
+// between stages and the scans as in their kernels: the same counts, offsets and sorted lists,
+// so the same bits. Not for the per-colour solve (its colouring stays per item).
+@compute @workgroup_size(SG)
+fn search_one(@builtin(local_invocation_id) lid: vec3<u32>) {
+    let l = lid.x;
+    if (!running_uniform(l)) {
+        return;
+    }
+    if (l == 0u) {
+        sh_u = atomicLoad(&cc.searching);
+    }
+    if (workgroupUniformLoad(&sh_u) == 0u) {
+        return;
+    }
+    let p = cc.p;
+    let nb = groups(max(max(p.n_segs, p.n_buckets), max(p.n_local, p.n_slots))) * CG;
+    for (var i = l; i < nb; i += SG) {
+        box_item(i);
+    }
+    storageBarrier();
+    for (var j = l; j < p.n_segs; j += SG) {
+        if (segs[j].off == 0u) {
+            bucket_segment(j, false);
+        }
+    }
+    storageBarrier();
+    scan(p.o_bcount, p.o_boff, p.o_bcur, p.n_buckets, l);
+    storageBarrier();
+    for (var j = l; j < p.n_segs; j += SG) {
+        if (segs[j].off == 0u) {
+            bucket_segment(j, true);
+        }
+    }
+    storageBarrier();
+    for (var k = l; k < p.n_slots; k += SG) {
+        slot_count_item(k);
+    }
+    storageBarrier();
+    scan_slots_step(l);
+    storageBarrier();
+    // A search that does not fit stopped the step (STATE_SEARCH_GROW) for the host to grow the
+    // buffers: nothing more (the per-item kernels find the state and return).
+    if (!running_uniform(l)) {
+        return;
+    }
+    for (var k = l; k < p.n_slots; k += SG) {
+        slot_fill_item(k);
+    }
+    storageBarrier();
+    for (var k = l; k < p.n_slots; k += SG) {
+        visit_touched(k, false);
+    }
+    storageBarrier();
+    scan_nodes_step(l);
+    storageBarrier();
+    for (var k = l; k < p.n_slots; k += SG) {
+        visit_touched(k, true);
+    }
+    storageBarrier();
+    for (var i = l; i < p.n_local; i += SG) {
+        adj_sort_item(i);
+    }
+}
+
 // Whether master segment j may be paired with slot k (crate::contact::rules::admissible, with
 // the pass): the slot's pass; not a segment of the slave's own; another body, or self-contact
 // without the neighbouring segments and without the segments the slave lies behind in the
@@ -391,10 +462,13 @@ fn wall_near(sl: Slot) -> bool {
 // ContactParams.o_aflag); an inactive slot's constraint is cleared (it can have none).
 @compute @workgroup_size(CG)
 fn slot_count(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
-    if (!item_runs(k, cc.p.n_slots)) {
-        return;
+    if (item_runs(gid.x, cc.p.n_slots)) {
+        slot_count_item(gid.x);
     }
+}
+
+// `slot_count` of slot k.
+fn slot_count_item(k: u32) {
     let n = visit(k, 0u, 0u);
     wss(cc.p.o_ccount + k, n);
     let sl = slots[k];
@@ -415,10 +489,13 @@ fn slot_count(@builtin(global_invocation_id) gid: vec3<u32>) {
 // 2e. Candidate offsets and the active slots' offsets; a search that does not fit stops the step for the host to grow the buffer.
 @compute @workgroup_size(SG)
 fn scan_slots(@builtin(local_invocation_id) lid: vec3<u32>) {
-    let l = lid.x;
-    if (!running_uniform(l)) {
-        return;
+    if (running_uniform(lid.x)) {
+        scan_slots_step(lid.x);
     }
+}
+
+// `scan_slots` on lane l (every lane of the workgroup, in uniform control flow).
+fn scan_slots_step(l: u32) {
     let total = scan(cc.p.o_ccount, cc.p.o_coff, NONE, cc.p.n_slots, l);
     scan(cc.p.o_aflag, cc.p.o_aoff, NONE, cc.p.n_slots, l);
     if (l == 0u) {
@@ -435,10 +512,13 @@ fn scan_slots(@builtin(local_invocation_id) lid: vec3<u32>) {
 // 2f. The candidates, sorted per slot; the list of active slots.
 @compute @workgroup_size(CG)
 fn slot_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = gid.x;
-    if (!item_runs(k, cc.p.n_slots)) {
-        return;
+    if (item_runs(gid.x, cc.p.n_slots)) {
+        slot_fill_item(gid.x);
     }
+}
+
+// `slot_fill` of slot k.
+fn slot_fill_item(k: u32) {
     visit(k, 1u, wsl(cc.p.o_coff + k));
     if (wsl(cc.p.o_aflag + k) != 0u) {
         wss(cc.p.o_alist + wsl(cc.p.o_aoff + k), k);
@@ -497,11 +577,15 @@ fn adj_count(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(SG)
 fn scan_nodes(@builtin(local_invocation_id) lid: vec3<u32>) {
-    if (!running_uniform(lid.x)) {
-        return;
+    if (running_uniform(lid.x)) {
+        scan_nodes_step(lid.x);
     }
-    let total = scan(cc.p.o_ncount, cc.p.o_noff, cc.p.o_ncur, cc.p.n_local, lid.x);
-    if (lid.x == 0u) {
+}
+
+// `scan_nodes` on lane l (every lane of the workgroup, in uniform control flow).
+fn scan_nodes_step(l: u32) {
+    let total = scan(cc.p.o_ncount, cc.p.o_noff, cc.p.o_ncur, cc.p.n_local, l);
+    if (l == 0u) {
         cc.n_adj = total;
     }
 }
@@ -516,10 +600,13 @@ fn adj_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(CG)
 fn adj_sort(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
-    if (!item_runs(i, cc.p.n_local)) {
-        return;
+    if (item_runs(gid.x, cc.p.n_local)) {
+        adj_sort_item(gid.x);
     }
+}
+
+// `adj_sort` of local node i.
+fn adj_sort_item(i: u32) {
     let b = cc.p.cand_capacity + wsl(cc.p.o_noff + i);
     let n = wsl(cc.p.o_noff + i + 1u) - wsl(cc.p.o_noff + i);
     for (var p = 1u; p < n; p++) {

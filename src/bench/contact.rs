@@ -40,6 +40,9 @@ pub struct ContactTiming {
     /// How the GPU's one-workgroup solve colours its constraints (`None`: the adapter's default,
     /// [`crate::gpu::contact::parallel_colouring`]): a comparison.
     pub parallel_colouring: Option<bool>,
+    /// How the GPU's contact search is dispatched (`None`: the default,
+    /// [`crate::gpu::contact::search::search_one_path`]): a comparison.
+    pub search_one: Option<bool>,
     /// Whether the GPU records each batch while the device runs the one before (the default;
     /// [`GpuSolver::set_record_ahead`]), or only after its readback: a comparison.
     pub record_ahead: bool,
@@ -286,6 +289,7 @@ fn gpu_solvers(
     let options = crate::gpu::contact::ContactOptions {
         plain_sweeps: timing.plain_sweeps,
         parallel_colouring: timing.parallel_colouring,
+        search_one: timing.search_one,
         ..Default::default()
     };
     let solver = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
@@ -400,6 +404,7 @@ mod tests {
             failure: None,
             plain_sweeps: false,
             parallel_colouring: None,
+            search_one: None,
             record_ahead: true,
         }
     }

@@ -163,6 +163,11 @@ pub struct BenchArgs {
     /// scenes' tables.
     #[arg(long)]
     pub no_record_ahead: bool,
+    /// How the GPU's contact search is dispatched (default: in one workgroup for small contact
+    /// sets on GPUs, per item on CPU adapters; `ricochet::gpu::contact::search::search_one_path`):
+    /// a comparison, for the tables and --profile.
+    #[arg(long, value_enum)]
+    pub search: Option<BenchSearch>,
     /// Also write the table(s) as JSON: the block rows as an array; with a contact scene,
     /// an object {"block": [...], "contact": [...]}; with --probe or --profile, its report.
     #[arg(long)]
@@ -334,6 +339,15 @@ pub enum BenchColouring {
     Serial,
     /// Greedy in a hashed order, in parallel Jones-Plassmann rounds (the GPUs' default).
     Parallel,
+}
+
+/// `bench --search`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchSearch {
+    /// In one workgroup: one dispatch a step, empty on the steps that do not search.
+    One,
+    /// In its eleven per-item kernels, dispatched indirectly (empty on those steps).
+    Items,
 }
 
 /// `plot --format`.

@@ -19,7 +19,7 @@ use ricochet::bench::{
 use ricochet::gpu::GpuContext;
 use ricochet::scene::Scene;
 
-use super::args::{BenchArgs, BenchBackend, BenchColouring, BenchScene};
+use super::args::{BenchArgs, BenchBackend, BenchColouring, BenchScene, BenchSearch};
 
 /// The options of `ricochet bench` for the device check (`benches/device.sh`).
 #[derive(Args)]
@@ -58,11 +58,13 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         plain_sweeps,
         colouring,
         no_record_ahead,
+        search,
         json,
         adapter,
         device,
     } = args;
     let parallel_colouring = colouring.map(|c| c == BenchColouring::Parallel);
+    let search_one = search.map(|s| s == BenchSearch::One);
     if rounds == 0 || steps == 0 {
         anyhow::bail!("--steps and --rounds must be positive");
     }
@@ -123,7 +125,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
             &ctx,
             &scenes,
             (warmup, steps),
-            parallel_colouring,
+            (parallel_colouring, search_one),
             json.as_deref(),
         );
     }
@@ -156,6 +158,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         failure,
         plain_sweeps,
         parallel_colouring,
+        search_one,
         record_ahead: !no_record_ahead,
     };
     let contact_rows = contact_rows(&contact_scenes, &elements, &timing, run_cpu, ctx.as_ref());
@@ -326,11 +329,12 @@ fn profile(
     ctx: &Arc<GpuContext>,
     scenes: &[(ProfileScene, Vec<usize>)],
     (warmup, steps): (u64, u64),
-    parallel_colouring: Option<bool>,
+    (parallel_colouring, search_one): (Option<bool>, Option<bool>),
     json: Option<&Path>,
 ) -> anyhow::Result<ExitCode> {
     let options = ricochet::gpu::contact::ContactOptions {
         parallel_colouring,
+        search_one,
         ..Default::default()
     };
     let mut report = ProfileReport {

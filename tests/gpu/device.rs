@@ -208,7 +208,8 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
             "profile",
             "erosion",
             "colouring",
-            "ahead"
+            "ahead",
+            "search"
         ]
     );
     for s in steps {
@@ -222,6 +223,9 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     // The batches recorded after each readback: in device.log alone.
     assert!(steps[7]["file"].is_null());
     assert!(device_log.contains("--no-record-ahead"), "{device_log}");
+    // The per-item search's profile: in device.log alone.
+    assert!(steps[8]["file"].is_null());
+    assert!(device_log.contains("--search items"), "{device_log}");
     assert_eq!(get("probe.json")["bandwidth"]["verified"], true);
     let block = get("bench_block.json").as_array().expect("the block rows");
     assert_eq!(block.len(), 1);
@@ -266,7 +270,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     let files = json_files(&dir);
     assert_eq!(files.len(), 1, "meta.json alone");
     let steps = files[0].1["steps"].as_array().expect("steps").clone();
-    assert_eq!(steps.len(), 8);
+    assert_eq!(steps.len(), 9);
     assert!(steps
         .iter()
         .all(|s| s["status"] == "skipped" && s["file"].is_null()));

@@ -480,6 +480,72 @@ fn gpu_one_workgroup_contact_stage_matches_the_per_item_kernels() {
     }
 }
 
+/// The search in one workgroup (one dispatch a step, empty on the steps that do not search)
+/// against its eleven per-item kernels, on the pile and on the striker, with 8 threads (the CPU
+/// adapters' size), 64 and 256 (the GPUs' size; lavapipe runs lane groups of 8 in turn, so that
+/// a missing barrier shows), and with both contact stages after it: the same candidates and node adjacency, so the
+/// same bits on lavapipe. A candidate buffer too small at first grows from inside it as from
+/// the per-item kernels, with the same bits as a run that never grew. Not with the per-colour
+/// solve, whose colouring it does not do.
+#[test]
+fn gpu_search_in_one_workgroup_gives_the_bits_of_the_per_item_search() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let pile = asset("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
+    let striker = asset("stress/striker_plate_gpu_energy.toml");
+    for (name, text) in [("pile", &pile), ("striker", &striker)] {
+        for (group, one) in [(8, true), (64, false), (256, false)] {
+            let with = |search_one: bool| ContactOptions {
+                multi: Some(false),
+                one: Some(one),
+                group: Some(group),
+                search_one: Some(search_one),
+                ..ContactOptions::default()
+            };
+            let p = compare_paths(
+                &ctx,
+                text,
+                &format!("{name}-{group}"),
+                ("items", with(false)),
+                ("search_one", with(true)),
+            );
+            assert!(p.ra.summary.contact_searches > 1, "{name}: it searched");
+        }
+    }
+    let short = striker.replace("end_time = 3.2e-6", "end_time = 1.0e-6");
+    assert!(short.contains("end_time = 1.0e-6"));
+    let grown = ContactOptions {
+        search_one: Some(true),
+        candidate_capacity: Some(8),
+        ..ContactOptions::default()
+    };
+    let (r, _, u, grows) = run_gpu_with(
+        &ctx,
+        &short,
+        "search-one-default",
+        ContactOptions::default(),
+    );
+    let (rs, _, us, grows_small) = run_gpu_with(&ctx, &short, "search-one-grown", grown);
+    assert_eq!(grows, 0);
+    assert!(grows_small > 0, "a buffer of 8 candidates must grow");
+    assert_same_bits(
+        (&r, &u),
+        (&rs, &us),
+        "the run grown in one workgroup differs",
+    );
+    let (scene, model, plan) = load(&pile, "pile.toml");
+    let options = ContactOptions {
+        multi: Some(true),
+        search_one: Some(true),
+        ..ContactOptions::default()
+    };
+    let err = GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(err.contains("search in one workgroup"), "{err}");
+}
+
 /// The one-workgroup contact kernels (the search's scans, the solve, the reports' end) at 8, 64
 /// and 256 threads: 8 is the CPU adapters' size and 256 the GPUs' (`contact::one_group`), so this
 /// runs the GPUs' size on lavapipe too. The scans sum integers and a colour's constraints share no

@@ -256,6 +256,7 @@ fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
         plain_sweeps: false,
         // (The GPUs' colouring, which lavapipe does not take by default.)
         parallel_colouring: Some(true),
+        search_one: None,
         // (Each batch recorded after the readback of the one before: the comparison's path.)
         record_ahead: false,
     };

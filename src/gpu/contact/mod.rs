@@ -81,8 +81,11 @@ pub const MAX_COLORS: u32 = 64;
 /// them, which costs time, never candidates). On lavapipe (Mesa 22.3.6, 2026-11-28) a grid of
 /// 2^19 buckets or more found no candidate at all, whatever the segments (the 10^4 striker with
 /// its grid forced to 2^19: none; the eroding striker of 39 042 slots and 153 600 candidate
-/// segments, 2^19 by the rule: none, its projectile through the plate), while 2^18 found them all;
-/// the cause is not found. Tested in `tests/gpu/erosion_contact.rs`.
+/// segments, 2^19 by the rule: none, its projectile through the plate), while 2^18 found them all.
+/// The likely cause (found on 2026-11-28): llvmpipe ends a shader invocation's loops after
+/// 65 535 iterations in all (`LP_MAX_TGSI_LOOP_ITERATIONS` in Mesa's gallivm, "shared between
+/// every loop in a shader"), and the bucket scan's 8 lanes take 2^16 buckets each at 2^19
+/// (`scan` in `shaders/contact_search.wgsl`). Tested in `tests/gpu/erosion_contact.rs`.
 pub const MAX_BUCKETS: u32 = 1 << 18;
 /// Sweep slots of the per-colour path (WGSL `MAX_SWEEP_SLOTS`).
 pub const MAX_SWEEP_SLOTS: u32 = 80;
@@ -385,6 +388,8 @@ pub struct ContactState {
     pub grows: u32,
     /// The stage in one workgroup before the search and one after it ([`one`]).
     one: bool,
+    /// The search in one workgroup ([`search::search_one_path`]).
+    search_one: bool,
     /// Eroding contact (a scene with failure): the fixed candidate lists, the model whose
     /// surfaces they follow, and the slots and segments as last written to the device.
     eroding: Option<erosion::Eroding>,
@@ -437,6 +442,7 @@ impl ContactState {
             split,
             extrapolate,
             one,
+            search_one,
         } = path;
         let masked = if model.has_erosion() {
             Some(Masked::new(model, &set).ok_or_else(|| erosion::unfollowed("build"))?)
@@ -610,6 +616,7 @@ impl ContactState {
             ind_bind,
             grows: 0,
             one,
+            search_one,
             eroding,
         })
     }
@@ -673,7 +680,11 @@ impl ContactState {
             }
         }
         if on(PART_SEARCH) {
-            k.search.record(&d, pass);
+            if self.search_one {
+                k.search.record_one(&d, pass);
+            } else {
+                k.search.record(&d, pass);
+            }
         }
         if self.one {
             // Narrow phase to reports in one dispatch (timed as the narrow part).

@@ -7,7 +7,7 @@
 
 use crate::error::{Error, Result};
 
-use super::{one, solve};
+use super::{one, search, solve};
 
 /// Choices of the contact stage a caller may make (tests, benchmarks); the defaults decide by
 /// adapter and size.
@@ -47,6 +47,11 @@ pub struct ContactOptions {
     /// order (`true`) or greedily in slot order in one invocation (`false`); `None`:
     /// [`parallel_colouring`]. Each gives the same bits at every size and on every run.
     pub parallel_colouring: Option<bool>,
+    /// The search in one workgroup, one dispatch that is empty on the steps that do not search
+    /// (`Some(true)`), or its eleven per-item kernels, dispatched indirectly and empty on those
+    /// steps (`Some(false)`); `None`: [`super::search::search_one_path`]. Not with the
+    /// per-colour solve. The same bits either way.
+    pub search_one: Option<bool>,
 }
 
 /// Whether the one-workgroup solve colours in parallel rounds on an adapter of `device_type`:
@@ -77,8 +82,11 @@ const _: () = assert!(super::CG == crate::gpu::shader::ITEM_GROUP);
 /// lavapipe's search (Mesa 22.3.6) wrote wrong candidate offsets on 2026-11-28, whatever the
 /// segments: the bench striker with failure (every node of both bodies a slot) found its
 /// candidates at 241 602 slots (n = 200) and lost them at 377 002 (n = 250) and 543 000 (n = 300),
-/// as a hash grid of 2^19 buckets lost them where 2^18 did not ([`super::MAX_BUCKETS`]); the cause
-/// is not found. A scene beyond it is refused on such an adapter rather than run without contact.
+/// as a hash grid of 2^19 buckets lost them where 2^18 did not ([`super::MAX_BUCKETS`]). The likely
+/// cause (2026-11-28): llvmpipe ends a shader invocation's loops after 65 535 iterations in all
+/// (Mesa's `LP_MAX_TGSI_LOOP_ITERATIONS`), and the slots' scans give each of 8 lanes an eighth of
+/// the slots, in two loops a scan ([`super::search::SEARCH_ONE_CPU_MAX`]). A scene beyond it is
+/// refused on such an adapter rather than run without contact.
 pub const CPU_ADAPTER_SLOTS: usize = 1 << 18;
 
 /// How a scene's contact stage is solved and dispatched.
@@ -92,6 +100,8 @@ pub(crate) struct Path {
     pub extrapolate: bool,
     /// The stage in one workgroup before the search and one after it ([`one`]).
     pub one: bool,
+    /// The search in one workgroup ([`search::search_one_path`]).
+    pub search_one: bool,
 }
 
 impl Path {
@@ -131,11 +141,29 @@ impl Path {
                     .into(),
             ));
         }
+        let search_one = options
+            .search_one
+            .unwrap_or_else(|| !multi && search::search_one_path(nodes, slots, device_type));
+        if search_one && multi {
+            return Err(Error::Gpu(
+                "the search in one workgroup does not colour the slots for the per-colour solve"
+                    .into(),
+            ));
+        }
+        let most = search::SEARCH_ONE_CPU_MAX;
+        if search_one && device_type == wgpu::DeviceType::Cpu && nodes.max(slots) > most {
+            return Err(Error::Gpu(format!(
+                "the search in one workgroup on a CPU adapter takes at most {most} contact nodes \
+                 and slots (llvmpipe ends a shader's loops after 65 535 iterations in all); this \
+                 contact has {nodes} nodes and {slots} slots"
+            )));
+        }
         Ok(Path {
             multi,
             split,
             extrapolate: !options.plain_sweeps,
             one,
+            search_one,
         })
     }
 }
@@ -158,5 +186,41 @@ mod tests {
             }
             assert!(Path::choose(&o, nodes, slots, wgpu::DeviceType::DiscreteGpu).is_ok());
         }
+    }
+
+    /// The search in one workgroup: by default on a GPU up to [`search::SEARCH_ONE_ITEMS`] and
+    /// never on a CPU adapter, where asking for it beyond [`search::SEARCH_ONE_CPU_MAX`] is
+    /// refused (llvmpipe's loop budget), and never with the per-colour solve.
+    #[test]
+    fn the_search_in_one_workgroup_is_taken_where_it_fits() {
+        let o = ContactOptions {
+            multi: Some(false),
+            ..ContactOptions::default()
+        };
+        let gpu = wgpu::DeviceType::DiscreteGpu;
+        let cpu = wgpu::DeviceType::Cpu;
+        let (at, over) = (search::SEARCH_ONE_ITEMS, search::SEARCH_ONE_ITEMS + 1);
+        let path = |o: &ContactOptions, n: usize, d| Path::choose(o, n, n, d).map(|p| p.search_one);
+        assert_eq!(path(&o, at, gpu).ok(), Some(true));
+        assert_eq!(path(&o, over, gpu).ok(), Some(false));
+        assert_eq!(path(&o, 10, cpu).ok(), Some(false));
+        let forced = ContactOptions {
+            search_one: Some(true),
+            ..o
+        };
+        assert_eq!(
+            path(&forced, search::SEARCH_ONE_CPU_MAX, cpu).ok(),
+            Some(true)
+        );
+        match path(&forced, search::SEARCH_ONE_CPU_MAX + 1, cpu) {
+            Err(Error::Gpu(m)) => assert!(m.contains("65 535"), "{m}"),
+            other => panic!("{other:?}"),
+        }
+        let multi = ContactOptions {
+            multi: Some(true),
+            search_one: Some(true),
+            ..ContactOptions::default()
+        };
+        assert!(path(&multi, 10, gpu).is_err());
     }
 }

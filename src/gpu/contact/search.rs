@@ -43,6 +43,34 @@ const LIST_FILL: usize = 13;
 const _: () = assert!(matches!(ENTRIES[COLOR_ROUND].as_bytes(), b"color_round"));
 const _: () = assert!(matches!(ENTRIES[LIST_FILL].as_bytes(), b"list_fill"));
 
+/// Contact nodes and slots (the larger) up to which a GPU searches in one workgroup
+/// ([`search_one_path`]).
+pub const SEARCH_ONE_ITEMS: usize = 1 << 12;
+
+/// The most contact nodes and slots (the larger) with which a CPU adapter may be asked to search
+/// in one workgroup ([`super::ContactOptions::search_one`]; it does not by default). llvmpipe
+/// (lavapipe) ends a shader invocation's loops after 65 535 iterations in all
+/// (`LP_MAX_TGSI_LOOP_ITERATIONS`, "shared between every loop" of a shader, Mesa's gallivm), and
+/// one workgroup of 8 lanes takes every item of every stage in turn: the pile of 196 disks (9 408
+/// slots) lost candidates that way on 2026-11-28, silently. At this bound the test scenes search
+/// in one workgroup with the per-item kernels' bits.
+pub const SEARCH_ONE_CPU_MAX: usize = 1 << 10;
+
+/// Whether the search runs in one workgroup (`search_one` in `shaders/contact_search.wgsl`) for
+/// `nodes` contact nodes and `slots` slots on an adapter of `device_type`, rather than in its
+/// eleven per-item kernels: on a GPU up to [`SEARCH_ONE_ITEMS`] of each, on a CPU adapter never
+/// ([`SEARCH_ONE_CPU_MAX`]). The per-item kernels are dispatched on every step, empty (zero
+/// workgroups) on the steps that do not search, and each costs its dispatch and the barrier
+/// before it: on an NVIDIA H200 the search part of the 10^4 striker's step took 28 us and of
+/// the 10^5 striker's 35 us (2026-11-27, 81bd78b), with a search every seventh step. One
+/// workgroup takes one dispatch a step and more time on the steps that search, about in
+/// proportion to the items over its 256 threads; the bound is an estimate (a search of 4 096
+/// items costing about those 35 us a step), not yet measured on a GPU: the device check's
+/// ninth step compares the two.
+pub fn search_one_path(nodes: usize, slots: usize, device_type: wgpu::DeviceType) -> bool {
+    device_type != wgpu::DeviceType::Cpu && nodes.max(slots) <= SEARCH_ONE_ITEMS
+}
+
 /// The layout of group 1 of the kernels that write indirect sizes (`plan`, `scan_lists`, and
 /// `prep_one` of [`super::one`]): the indirect-argument buffer.
 pub(crate) fn indirect_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
@@ -78,6 +106,7 @@ pub struct SearchKernels {
     /// The kernels dispatched indirectly, in [`ENTRIES`] order.
     kernels: Vec<wgpu::ComputePipeline>,
     scan_lists: wgpu::ComputePipeline,
+    search_one: wgpu::ComputePipeline,
 }
 
 impl SearchKernels {
@@ -92,6 +121,7 @@ impl SearchKernels {
                 .map(|e| pipeline(device, &m, &layouts.main, e))
                 .collect(),
             scan_lists: pipeline(device, &m, &layouts.with_indirect, "scan_lists"),
+            search_one: pipeline(device, &m, &layouts.main, "search_one"),
             module: m,
         }
     }
@@ -100,6 +130,12 @@ impl SearchKernels {
     pub(crate) fn record_prep(&self, d: &Dispatch<'_>, pass: &mut wgpu::ComputePass<'_>) {
         d.direct(pass, &self.prep, groups(d.params.n_local));
         d.direct(pass, &self.plan, 1);
+    }
+
+    /// Records the search in one workgroup (`search_one`; [`search_one_path`]): one direct
+    /// dispatch, empty when no search is due.
+    pub(crate) fn record_one(&self, d: &Dispatch<'_>, pass: &mut wgpu::ComputePass<'_>) {
+        d.direct(pass, &self.search_one, 1);
     }
 
     /// Records the search kernels, dispatched indirectly (empty when no search is due): the
