@@ -925,3 +925,58 @@ fn gpu_candidate_buffer_grows_and_the_run_is_unchanged() {
     assert!(grows_small > 0, "a buffer of 8 candidates must grow");
     assert_same_bits((&r, &u), (&rs, &us), "the grown run differs");
 }
+
+/// The one-workgroup contact stage of CPU adapters at the size where it stops being the default
+/// (`one::ONE_NODES`: the bench's pile of 169 disks, 4 056 contact nodes, 700 steps into
+/// contact) and on the 10^5-element bench striker (300 steps, up to 159 sweeps a step) gives
+/// the per-item kernels' bits. One workgroup of 8 lanes on lavapipe takes every item in turn,
+/// and llvmpipe ends a shader invocation's loops after 65 535 iterations in all (Mesa's
+/// `LP_MAX_TGSI_LOOP_ITERATIONS`): the search in one workgroup lost candidates that way on a
+/// pile of 196 disks (`gpu::contact::search::SEARCH_ONE_CPU_MAX`), silently.
+#[test]
+fn gpu_one_workgroup_contact_stage_keeps_the_per_item_bits_at_its_largest_sizes() {
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let pile = ricochet::bench::pile_text(13, Some(ricochet::bench::PileContact::All));
+    let striker = ricochet::bench::striker_text(
+        ricochet::bench::ContactScene::Striker.size_for(100_000),
+        true,
+    );
+    for (name, text, steps) in [("pile", pile, 700), ("striker", striker, 300)] {
+        let (scene, model, plan) = load(&text, &format!("{name}.toml"));
+        let run = |one: bool| {
+            let options = ContactOptions {
+                multi: Some(false),
+                one: Some(one),
+                ..ContactOptions::default()
+            };
+            let mut gpu = GpuSolver::with_options(
+                ctx.clone(),
+                &model,
+                &plan,
+                schedule(&scene),
+                None,
+                options,
+            )
+            .expect("gpu solver");
+            assert_eq!(gpu.run_steps(steps).expect("steps"), steps);
+            (
+                displacement_bits(&gpu.displacement_now().expect("u")),
+                gpu.counters(),
+            )
+        };
+        let ((items, ci), (one, co)) = (run(false), run(true));
+        println!(
+            "{name}: {} model nodes, sweeps mean {:.2} max {}",
+            model.node_count(),
+            co.contact_sweeps_mean,
+            co.contact_sweeps_max
+        );
+        assert!(co.contact_sweeps_max > 0, "{name}: in contact");
+        assert_eq!(ci.contact_sweeps_max, co.contact_sweeps_max, "{name}");
+        assert!(
+            items == one,
+            "{name}: one workgroup and the per-item kernels differ"
+        );
+    }
+}
