@@ -12,7 +12,8 @@
 #   4. pile     the pile likewise (--warmup 600: its disks reach the wall near step 440)
 #                                                                                 -> bench_pile.json
 #   5. profile  device us per step by part (timestamp queries) of the block at 10^5 and 10^6 and
-#               of the striker and the pile at 10^4, 10^5, 10^6: 600 warm-up steps, 200 profiled
+#               of the striker and the pile at 10^4, 10^5, 10^6: 600 warm-up steps, 200 profiled,
+#               then 200 in whole batches (device us a step) and 200 as a run takes them (wall)
 #                                                                                 -> profile.json
 #   6. erosion  the striker at 10^4 and 10^5 with contact and with failure on every material
 #               (`--failure`: elements erode at a principal strain of 0.03 from about step 60,
@@ -67,8 +68,9 @@
 #            About 20 s                                                                   [150 s]
 #   pile     1 000 steps of each variant at 10^6, about 0.85 ms (1 189 steps/s): 2 s; the 10 000
 #            disks' scene generated and meshed twice: 20-60 s. About 40 s                 [150 s]
-#   profile  800 steps of each of 8 scenes, at most 2.2 ms a step: 6 s; 8 models, the 10^6 pile
-#            the slowest (10-30 s): about 60 s                                            [180 s]
+#   profile  1 200 steps of each of 8 scenes (600 warm-up, 200 by part, 200 whole, 200 as a run),
+#            at most 2.2 ms a step: 21 s; 8 models, the 10^6 pile the slowest (10-30 s): about
+#            75 s                                                                         [180 s]
 #   erosion  never run on an NVIDIA GPU yet: 700 steps of each of three variants a size, a follow
 #            of erosion about every second step, each a round trip with the host's follow of the
 #            contact surfaces (lavapipe, 2026-11-28: 1.7 ms of host time a follow at 10^4, and

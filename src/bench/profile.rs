@@ -74,6 +74,14 @@ pub struct ProfileRow {
     pub forces_gb_per_s: f64,
     /// `update_bytes` over the `update` part's time, in GB/s.
     pub update_gb_per_s: f64,
+    /// Device microseconds per step of whole batches of steps, each in one pass between two
+    /// timestamps ([`crate::gpu::GpuSolver::profile_whole_steps`], as many steps as profiled):
+    /// the step without the passes between its parts that `parts_us` needs.
+    pub step_device_us: f64,
+    /// Wall microseconds per step of the same number of steps taken as a run takes them
+    /// ([`crate::gpu::GpuSolver::run_steps`]: batches recorded ahead, readbacks); beyond
+    /// `step_device_us`, the host's time the device waited for.
+    pub step_wall_us: f64,
 }
 
 /// The profile of a set of scenes on one adapter.
@@ -129,6 +137,13 @@ pub fn profile(
         return Ok(None);
     };
     let counters = solver.counters();
+    let step_device_us = match solver.profile_whole_steps(steps)? {
+        Some((_, s)) => 1e6 * s,
+        None => f64::NAN,
+    };
+    let t0 = std::time::Instant::now();
+    let walked = solver.run_steps(steps)?;
+    let step_wall_us = 1e6 * t0.elapsed().as_secs_f64() / walked.max(1) as f64;
     let (elements, nodes) = (model.element_count(), model.node_count());
     let traffic = traffic(&solver.kernels().features);
     let forces_bytes = bytes_per_step(
@@ -166,6 +181,8 @@ pub fn profile(
         update_bytes,
         forces_gb_per_s: rate(forces_bytes, part("forces")),
         update_gb_per_s: rate(update_bytes, part("update")),
+        step_device_us,
+        step_wall_us,
     }))
 }
 
@@ -177,8 +194,8 @@ pub fn profile_table(rows: &[ProfileRow]) -> String {
         s.push_str(&format!(" {:>9}", p.trim_start_matches("contact ")));
     }
     s.push_str(&format!(
-        " {:>9} {:>6} {:>12} {:>12}\n",
-        "total", "sweeps", "forces GB/s", "update GB/s"
+        " {:>9} {:>6} {:>12} {:>12} {:>9} {:>9}\n",
+        "total", "sweeps", "forces GB/s", "update GB/s", "step dev", "step wall"
     ));
     for r in rows {
         s.push_str(&format!("{:<8} {:>9}", r.scene, r.elements));
@@ -186,13 +203,19 @@ pub fn profile_table(rows: &[ProfileRow]) -> String {
             s.push_str(&format!(" {us:>9.1}"));
         }
         s.push_str(&format!(
-            " {:>9.1} {:>6.1} {:>12.1} {:>12.1}\n",
-            r.total_us, r.sweeps_mean, r.forces_gb_per_s, r.update_gb_per_s
+            " {:>9.1} {:>6.1} {:>12.1} {:>12.1} {:>9.1} {:>9.1}\n",
+            r.total_us,
+            r.sweeps_mean,
+            r.forces_gb_per_s,
+            r.update_gb_per_s,
+            r.step_device_us,
+            r.step_wall_us
         ));
     }
     s.push_str(
         "(device us per step by part, timestamp queries; GB/s: the bytes of BENCHMARKS.md's \
-         traffic table over the part's time)\n",
+         traffic table over the part's time; step dev: device us per step of whole batches in \
+         one pass each; step wall: wall us per step as a run takes them)\n",
     );
     s
 }

@@ -90,6 +90,10 @@ fn the_profile_times_every_part_or_says_why_not() {
         assert!(row.total_us > 0.0 && (row.total_us - sum).abs() <= 1e-9 * sum);
         assert!(row.forces_bytes > 0.0 && row.update_bytes > 0.0);
         assert!(row.forces_gb_per_s.is_finite() && row.update_gb_per_s.is_finite());
+        // The whole step's device time (one pass a batch) and wall time (as a run takes them).
+        for us in [row.step_device_us, row.step_wall_us] {
+            assert!(us.is_finite() && us > 0.0, "{us} us a step");
+        }
         if which == ProfileScene::Block {
             // 36 elements, 49 nodes of the block: the traffic table's 168 B per element and
             // 32 B per node in the forces part, 48 and 72 in the update part.

@@ -1,11 +1,13 @@
 //! Timing the GPU step for the bench: one stage alone or whole steps by wall time
 //! ([`GpuSolver::time_stage`]), and each part of real steps between GPU timestamps
-//! ([`GpuSolver::profile_steps`], where the adapter has timestamp queries).
+//! ([`GpuSolver::profile_steps`], where the adapter has timestamp queries), or whole batches of
+//! steps between two ([`GpuSolver::profile_whole_steps`]).
 
 use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::gpu::contact::{PART_NARROW, PART_PREP, PART_REPORT, PART_SEARCH, PART_SOLVE};
+use crate::gpu::state::MAX_BATCH;
 
 use super::GpuSolver;
 
@@ -154,6 +156,73 @@ impl GpuSolver {
             *t /= taken.max(1) as f64;
         }
         Ok(Some((taken, seconds)))
+    }
+}
+
+impl GpuSolver {
+    /// Takes about `steps` real steps (as [`GpuSolver::run_steps`], outputs discarded), each
+    /// batch in one compute pass between two GPU timestamps, and returns the steps taken and the
+    /// device seconds per step: the whole step as the device runs it, without the passes that
+    /// [`GpuSolver::profile_steps`] puts between its parts, and without the host's time between
+    /// batches. `None` when the adapter has no timestamp queries.
+    ///
+    /// # Errors
+    /// [`Error::Gpu`] when the device is lost.
+    pub fn profile_whole_steps(&mut self, steps: u64) -> Result<Option<(u64, f64)>> {
+        if !self.ctx.timestamps {
+            return Ok(None);
+        }
+        let device = self.ctx.device.clone();
+        let queries = device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some("profile_whole"),
+            ty: wgpu::QueryType::Timestamp,
+            count: 2,
+        });
+        let buffer = |label: &str, usage: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: 16,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let resolve = buffer(
+            "profile_whole_resolve",
+            wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let staging = buffer(
+            "profile_whole_staging",
+            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        );
+        let period = self.ctx.queue.get_timestamp_period() as f64 * 1e-9;
+        let mut seconds = 0.0;
+        let taken = self.take_steps(steps, MAX_BATCH, |solver, n| {
+            let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("profile_whole"),
+            });
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("steps"),
+                    timestamp_writes: Some(wgpu::ComputePassTimestampWrites {
+                        query_set: &queries,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: Some(1),
+                    }),
+                });
+                for _ in 0..n {
+                    solver.state.record_step(&solver.kernels, &mut pass);
+                }
+            }
+            enc.resolve_query_set(&queries, 0..2, &resolve, 0);
+            enc.copy_buffer_to_buffer(&resolve, 0, &staging, 0, 16);
+            solver.finish_submission(enc, n);
+            let stamps: Vec<u64> = bytemuck::pod_collect_to_vec(&solver.map_prefix(&staging, 16)?);
+            // Timing data, not results: kept out of the bytes read back.
+            solver.counters.bytes_read_back -= 16;
+            seconds += stamps[1].saturating_sub(stamps[0]) as f64 * period;
+            Ok(())
+        })?;
+        Ok(Some((taken, seconds / taken.max(1) as f64)))
     }
 }
 
