@@ -43,9 +43,10 @@ pub struct ContactTiming {
     /// How the GPU's contact search is dispatched (`None`: the default,
     /// [`crate::gpu::contact::search::search_one_path`]): a comparison.
     pub search_one: Option<bool>,
-    /// Whether the GPU records each batch while the device runs the one before (the default;
-    /// [`GpuSolver::set_record_ahead`]), or only after its readback: a comparison.
-    pub record_ahead: bool,
+    /// Whether the GPU records each batch while the device runs the one before
+    /// ([`GpuSolver::set_record_ahead`]) or only after its readback (`None`: the adapter's
+    /// default, [`crate::gpu::solver::record_ahead`]): a comparison.
+    pub record_ahead: Option<bool>,
 }
 
 /// Warm-up steps of a contact row unless asked for more: two, the first search included.
@@ -294,7 +295,9 @@ fn gpu_solvers(
     };
     let solver = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
         let mut g = GpuSolver::with_options(ctx.clone(), &m, &p, s, None, options)?;
-        g.set_record_ahead(timing.record_ahead);
+        if let Some(on) = timing.record_ahead {
+            g.set_record_ahead(on);
+        }
         Ok::<_, crate::Error>(g)
     };
     let none = Variant::default();
@@ -405,7 +408,7 @@ mod tests {
             plain_sweeps: false,
             parallel_colouring: None,
             search_one: None,
-            record_ahead: true,
+            record_ahead: None,
         }
     }
 

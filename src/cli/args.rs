@@ -159,8 +159,8 @@ pub struct BenchArgs {
     #[arg(long, value_enum)]
     pub colouring: Option<BenchColouring>,
     /// Record each GPU batch of steps only after the readback of the one before, instead of
-    /// while the device runs it (`GpuSolver::set_record_ahead`): a comparison for the contact
-    /// scenes' tables.
+    /// while the device runs it (`GpuSolver::set_record_ahead`; the GPUs' default, not the CPU
+    /// adapters'): a comparison for the contact scenes' tables.
     #[arg(long)]
     pub no_record_ahead: bool,
     /// How the GPU's contact search is dispatched (default: in one workgroup for small contact

@@ -159,7 +159,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         plain_sweeps,
         parallel_colouring,
         search_one,
-        record_ahead: !no_record_ahead,
+        record_ahead: no_record_ahead.then_some(false),
     };
     let contact_rows = contact_rows(&contact_scenes, &elements, &timing, run_cpu, ctx.as_ref());
     if block {

@@ -47,6 +47,9 @@ fn run_gpu_with(
     let mut gpu =
         GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
             .expect("gpu solver");
+    // Each batch recorded while the device runs the one before, as on GPUs (not lavapipe's
+    // default): the grows and resumed steps of these runs drop the batch recorded ahead.
+    gpu.set_record_ahead(true);
     let dir = tmp_dir(name);
     let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("run");
     let _ = std::fs::remove_dir_all(&dir);

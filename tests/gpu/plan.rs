@@ -257,8 +257,8 @@ fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
         // (The GPUs' colouring, which lavapipe does not take by default.)
         parallel_colouring: Some(true),
         search_one: None,
-        // (Each batch recorded after the readback of the one before: the comparison's path.)
-        record_ahead: false,
+        // (Each batch recorded ahead, which lavapipe does not do by default.)
+        record_ahead: Some(true),
     };
     let rows =
         ricochet::bench::both_contact(ctx, ricochet::bench::ContactScene::Striker, 4, &timing)

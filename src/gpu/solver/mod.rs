@@ -16,7 +16,7 @@ mod submit;
 
 pub use hooks::LastColouring;
 pub use profile::PROFILE_PARTS;
-pub use submit::AheadCounts;
+pub use submit::{record_ahead, AheadCounts};
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -283,6 +283,7 @@ impl GpuSolver {
                 .and_then(|c| c.penalty_step())
                 .map(|(_, w)| w.to_string()),
         );
+        let record_ahead = submit::record_ahead(ctx.info.device_type);
         Ok(Self {
             ctx,
             kernels,
@@ -302,7 +303,7 @@ impl GpuSolver {
             batch_start: 0,
             eroded: Vec::new(),
             erosion_cap: MAX_BATCH,
-            record_ahead: true,
+            record_ahead,
             prepared: None,
             ahead: AheadCounts::default(),
         })

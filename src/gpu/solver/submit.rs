@@ -17,6 +17,15 @@ use crate::gpu::layout::Control;
 use super::{GpuSolver, SPEC_ROWS};
 use crate::gpu::contact::ContactCounters;
 
+/// Whether a solver on an adapter of `device_type` records each batch while the device runs
+/// the one before, by default: on GPUs. On a CPU adapter (lavapipe) the device's threads run on
+/// the host's cores, so there is nothing to overlap, and the same-run figures on the 2-core
+/// development machine went either way (BENCHMARKS.md, 2026-11-28); the tests of
+/// `tests/gpu/general.rs` and `tests/gpu/erosion_contact.rs` turn it on there.
+pub fn record_ahead(device_type: wgpu::DeviceType) -> bool {
+    device_type != wgpu::DeviceType::Cpu
+}
+
 /// A batch of steps recorded ahead of its submission.
 #[derive(Debug)]
 pub(super) struct RecordedAhead {
@@ -34,9 +43,9 @@ pub struct AheadCounts {
 }
 
 impl GpuSolver {
-    /// Whether each batch is recorded while the device runs the one before (the default), or
-    /// after its readback; the same results either way. Turning it off drops a batch recorded
-    /// ahead.
+    /// Whether each batch is recorded while the device runs the one before (the default on
+    /// GPUs, [`record_ahead`]), or after its readback; the same results either way. Turning it
+    /// off drops a batch recorded ahead.
     pub fn set_record_ahead(&mut self, on: bool) {
         self.record_ahead = on;
         if !on {
