@@ -1,8 +1,9 @@
 //! Submitting batches of steps. Recording a batch costs the host a few microseconds a step (on
 //! the development machine about 0.8 us a dispatch, almost all of it in wgpu's `finish`: 20 us a
 //! step for the striker's 26 dispatches, 4 us for the block's 7), and the device waits for it
-//! when it is recorded after the batch before has been read back. So the solver records the
-//! next batch right after submitting one, while the device runs it ("recording ahead"), and
+//! when it is recorded after the batch before has been read back. So on GPUs ([`record_ahead`])
+//! the solver records the next batch right after submitting one, while the device runs it
+//! ("recording ahead"), and
 //! submits it after the readback when the next batch has the same number of steps and nothing
 //! has changed the buffers or bind groups since (a contact buffer grown, the surfaces moved
 //! after an erosion, a checkpoint restored: [`GpuSolver::drop_recorded_ahead`]); otherwise it
