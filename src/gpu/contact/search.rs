@@ -44,8 +44,13 @@ const _: () = assert!(matches!(ENTRIES[COLOR_ROUND].as_bytes(), b"color_round"))
 const _: () = assert!(matches!(ENTRIES[LIST_FILL].as_bytes(), b"list_fill"));
 
 /// Contact nodes and slots (the larger) up to which a GPU searches in one workgroup
-/// ([`search_one_path`]).
-pub const SEARCH_ONE_ITEMS: usize = 1 << 12;
+/// ([`search_one_path`]). On an NVIDIA H200 (2026-11-28, c2f47a1, the device check's steps 5 and
+/// 9) one workgroup took the search part of the 10^4 striker from 22.9 to 17.0 us a step, and
+/// that of the 10^5 striker from 30.7 to 43.0 us. Their contact nodes are the boundaries of the
+/// striker's n x n quads and the plate's 5n x n, about 16 n: 656 at n = 41 and 2 064 at
+/// n = 129. One workgroup then costs about 4.9 us plus 0.018 us an item, and the per-item
+/// kernels' time grows by about 0.006 us an item: the two meet near 1 100 items.
+pub const SEARCH_ONE_ITEMS: usize = 1 << 10;
 
 /// The most contact nodes and slots (the larger) with which a CPU adapter may be asked to search
 /// in one workgroup ([`super::ContactOptions::search_one`]; it does not by default). llvmpipe
@@ -61,12 +66,8 @@ pub const SEARCH_ONE_CPU_MAX: usize = 1 << 10;
 /// eleven per-item kernels: on a GPU up to [`SEARCH_ONE_ITEMS`] of each, on a CPU adapter never
 /// ([`SEARCH_ONE_CPU_MAX`]). The per-item kernels are dispatched on every step, empty (zero
 /// workgroups) on the steps that do not search, and each costs its dispatch and the barrier
-/// before it: on an NVIDIA H200 the search part of the 10^4 striker's step took 28 us and of
-/// the 10^5 striker's 35 us (2026-11-27, 81bd78b), with a search every seventh step. One
-/// workgroup takes one dispatch a step and more time on the steps that search, about in
-/// proportion to the items over its 256 threads; the bound is an estimate (a search of 4 096
-/// items costing about those 35 us a step), not yet measured on a GPU: the device check's
-/// ninth step compares the two.
+/// before it; one workgroup takes one dispatch a step, and more time on the steps that search,
+/// in proportion to the items over its 256 threads.
 pub fn search_one_path(nodes: usize, slots: usize, device_type: wgpu::DeviceType) -> bool {
     device_type != wgpu::DeviceType::Cpu && nodes.max(slots) <= SEARCH_ONE_ITEMS
 }

@@ -15,14 +15,15 @@ impl GpuSolver {
     /// Runs `steps` steps of one stage alone (`"element"`, `"node"`, `"control"`, or a part of
     /// the contact stage: `"prep"`, `"search"`, `"narrow"`, `"solve"`, `"report"`), of the bare
     /// loop (`"bare"`: the element and node stages only, at the last step size) or whole steps
-    /// (`"step"`) in one submission, and returns the wall seconds, for the bench's per-stage
-    /// shares and its full / bare ratio. Whole steps this way do not stop for contact searches:
-    /// time contact scenes with [`GpuSolver::run_steps`].
+    /// (`"step"`) in one submission, and returns the wall seconds from the submission to the
+    /// device's end (the host's recording before it is not timed: a run records each batch
+    /// while the device runs the one before), for the bench's per-stage shares and the bare
+    /// loop. Whole steps this way do not stop for contact searches: time runs with
+    /// [`GpuSolver::run_steps`].
     ///
     /// # Errors
     /// [`Error::Gpu`] when the device is lost.
     pub fn time_stage(&mut self, stage: &str, steps: u32) -> Result<f64> {
-        let t0 = Instant::now();
         let (state, kernels) = (&self.state, &self.kernels);
         let enc = self.encode_pass(stage, |pass| {
             for _ in 0..steps {
@@ -43,7 +44,9 @@ impl GpuSolver {
                 }
             }
         });
-        self.ctx.queue.submit([enc.finish()]);
+        let commands = enc.finish();
+        let t0 = Instant::now();
+        self.ctx.queue.submit([commands]);
         self.ctx
             .device
             .poll(wgpu::PollType::wait_indefinitely())
