@@ -153,20 +153,51 @@ fn active_begin(f: u32) -> u32 {
 // 5a. Per chunk of CG active slots (in slot order), one partial per run of slots of one
 //     interface, at the run's first position j in the active list: fws[f_rp + j] = (impulse,
 //     active, largest penetration), summed in slot order; with friction also fws[f_rf + j] = the
-//     sums of slot_friction. Dispatched over the active slots (indirect entry ACTIVE_ENTRY).
+//     sums of slot_friction. Dispatched over the active slots (indirect entry ACTIVE_ENTRY). Each
+//     invocation puts its slot's report and interface in workgroup memory, and invocation 0 sums
+//     the runs from there: through storage (as `contact_one` still does, one invocation a chunk)
+//     its loop waited on two dependent loads a slot.
+var<workgroup> sh_rf: array<vec4<f32>, CG>;
+var<workgroup> sh_if: array<u32, CG>;
+
 @compute @workgroup_size(CG)
 fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
     let j = gid.x;
+    let l = lid.x;
     // (No early return before the barrier: the kernel runs on when contact is not running,
     // doing nothing.)
     let running = contact_running();
     let na = select(0u, active_count(), running);
+    var r = vec4<f32>(0.0);
+    var rf = vec4<f32>(0.0);
+    var f = NONE;
     if (j < na) {
-        report_item(j);
+        let k = active_slot(j);
+        r = slot_report(k, ctrl.dt_next);
+        count_bounded(k);
+        if (FRICTION && cc.p.friction != 0u) {
+            rf = slot_friction(k);
+        }
+        f = interface_of(k);
     }
-    storageBarrier();
-    if (lid.x == 0u && j < na) {
-        report_runs(j, min(CG, na - j));
+    sh_f[l] = r;
+    sh_rf[l] = rf;
+    sh_if[l] = f;
+    workgroupBarrier();
+    if (l == 0u && j < na) {
+        var runs = Runs(j, NONE, vec4<f32>(0.0), vec4<f32>(0.0));
+        for (var q = 0u; q < min(CG, na - j); q++) {
+            runs_add(&runs, j + q, sh_if[q], sh_f[q], sh_rf[q]);
+        }
+        runs_flush(runs);
+    }
+}
+
+// A penalty slot k whose impulse was bounded this step, counted.
+fn count_bounded(k: u32) {
+    let c = cons[k];
+    if (c.kind == KIND_PENALTY && c.dt_warm < 0.0) {
+        atomicAdd(&cc.bounded, 1u);
     }
 }
 
@@ -175,12 +206,42 @@ fn report_slots(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_in
 fn report_item(j: u32) {
     let k = active_slot(j);
     fws[cc.p.f_rp + j] = slot_report(k, ctrl.dt_next);
-    let c = cons[k];
-    if (c.kind == KIND_PENALTY && c.dt_warm < 0.0) {
-        atomicAdd(&cc.bounded, 1u);
-    }
+    count_bounded(k);
     if (FRICTION && cc.p.friction != 0u) {
         fws[cc.p.f_rf + j] = slot_friction(k);
+    }
+}
+
+// The run being summed: its first position in the active list, its interface (NONE before the
+// first item) and its sums.
+struct Runs {
+    start: u32,
+    f: u32,
+    acc: vec4<f32>,
+    accf: vec4<f32>,
+}
+
+// Adds the item at active position `at` (interface fq, report r, friction rf) to the runs in
+// order: a new interface ends the run before it.
+fn runs_add(s: ptr<function, Runs>, at: u32, fq: u32, r: vec4<f32>, rf: vec4<f32>) {
+    if (fq != (*s).f) {
+        runs_flush(*s);
+        *s = Runs(at, fq, vec4<f32>(0.0), vec4<f32>(0.0));
+    }
+    let a = (*s).acc;
+    (*s).acc = vec4<f32>(a.xyz + r.xyz, max(a.w, r.w));
+    if (FRICTION && cc.p.friction != 0u) {
+        (*s).accf += rf;
+    }
+}
+
+// A run's sums into its first item's place.
+fn runs_flush(s: Runs) {
+    if (s.f != NONE) {
+        fws[cc.p.f_rp + s.start] = s.acc;
+        if (FRICTION && cc.p.friction != 0u) {
+            fws[cc.p.f_rf + s.start] = s.accf;
+        }
     }
 }
 
@@ -188,36 +249,15 @@ fn report_item(j: u32) {
 // first item's place.
 fn report_runs(j: u32, n: u32) {
     let friction = FRICTION && cc.p.friction != 0u;
-    var start = j;
-    var acc = vec4<f32>(0.0);
-    var accf = vec4<f32>(0.0);
-    var f = NONE;
+    var runs = Runs(j, NONE, vec4<f32>(0.0), vec4<f32>(0.0));
     for (var q = 0u; q < n; q++) {
-        let fq = interface_of(active_slot(j + q));
-        if (fq != f) {
-            if (f != NONE) {
-                fws[cc.p.f_rp + start] = acc;
-                if (friction) {
-                    fws[cc.p.f_rf + start] = accf;
-                }
-            }
-            f = fq;
-            start = j + q;
-            acc = vec4<f32>(0.0);
-            accf = vec4<f32>(0.0);
-        }
-        let r = fws[cc.p.f_rp + j + q];
-        acc = vec4<f32>(acc.xyz + r.xyz, max(acc.w, r.w));
+        var rf = vec4<f32>(0.0);
         if (friction) {
-            accf += fws[cc.p.f_rf + j + q];
+            rf = fws[cc.p.f_rf + j + q];
         }
+        runs_add(&runs, j + q, interface_of(active_slot(j + q)), fws[cc.p.f_rp + j + q], rf);
     }
-    if (f != NONE) {
-        fws[cc.p.f_rp + start] = acc;
-        if (friction) {
-            fws[cc.p.f_rf + start] = accf;
-        }
-    }
+    runs_flush(runs);
 }
 
 fn acc_get(f: u32) -> vec4<f32> {
