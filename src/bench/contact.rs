@@ -43,6 +43,9 @@ pub struct ContactTiming {
     /// How the GPU's contact search is dispatched (`None`: the default,
     /// [`crate::gpu::contact::search::search_one_path`]): a comparison.
     pub search_one: Option<bool>,
+    /// Threads of the GPU's one-workgroup contact kernels (`None`: the adapter's default,
+    /// [`crate::gpu::contact::one_group`]): a comparison.
+    pub group: Option<u32>,
     /// Whether the GPU records each batch while the device runs the one before
     /// ([`GpuSolver::set_record_ahead`]) or only after its readback (`None`: the adapter's
     /// default, [`crate::gpu::solver::record_ahead`]): a comparison.
@@ -291,6 +294,7 @@ fn gpu_solvers(
         plain_sweeps: timing.plain_sweeps,
         parallel_colouring: timing.parallel_colouring,
         search_one: timing.search_one,
+        group: timing.group,
         ..Default::default()
     };
     let solver = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
@@ -408,6 +412,7 @@ mod tests {
             plain_sweeps: false,
             parallel_colouring: None,
             search_one: None,
+            group: None,
             record_ahead: None,
         }
     }

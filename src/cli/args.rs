@@ -168,6 +168,12 @@ pub struct BenchArgs {
     /// a comparison, for the tables and --profile.
     #[arg(long, value_enum)]
     pub search: Option<BenchSearch>,
+    /// Threads of the GPU's one-workgroup contact kernels (the one-workgroup solve, the
+    /// search's scans and the reports' end): a power of two from 8 to the adapter's largest
+    /// workgroup, at most 1024 (default: 256 on GPUs, 8 on CPU adapters;
+    /// `ricochet::gpu::contact::one_group`): a comparison, for the tables and --profile.
+    #[arg(long)]
+    pub contact_group: Option<u32>,
     /// Also write the table(s) as JSON: the block rows as an array; with a contact scene,
     /// an object {"block": [...], "contact": [...]}; with --probe or --profile, its report.
     #[arg(long)]

@@ -59,6 +59,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         colouring,
         no_record_ahead,
         search,
+        contact_group,
         json,
         adapter,
         device,
@@ -125,7 +126,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
             &ctx,
             &scenes,
             (warmup, steps),
-            (parallel_colouring, search_one),
+            (parallel_colouring, search_one, contact_group),
             json.as_deref(),
         );
     }
@@ -159,6 +160,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         plain_sweeps,
         parallel_colouring,
         search_one,
+        group: contact_group,
         record_ahead: no_record_ahead.then_some(false),
     };
     let contact_rows = contact_rows(&contact_scenes, &elements, &timing, run_cpu, ctx.as_ref());
@@ -329,12 +331,13 @@ fn profile(
     ctx: &Arc<GpuContext>,
     scenes: &[(ProfileScene, Vec<usize>)],
     (warmup, steps): (u64, u64),
-    (parallel_colouring, search_one): (Option<bool>, Option<bool>),
+    (parallel_colouring, search_one, group): (Option<bool>, Option<bool>, Option<u32>),
     json: Option<&Path>,
 ) -> anyhow::Result<ExitCode> {
     let options = ricochet::gpu::contact::ContactOptions {
         parallel_colouring,
         search_one,
+        group,
         ..Default::default()
     };
     let mut report = ProfileReport {

@@ -187,6 +187,11 @@ impl GpuContext {
         // The one-workgroup contact solve keeps as much of its work in workgroup memory as fits
         // (crate::gpu::shader::local_constraints).
         limits.max_compute_workgroup_storage_size = al.max_compute_workgroup_storage_size;
+        // And up to 1024 threads in a workgroup where the adapter has them
+        // (`ContactOptions::group`; the default groups stay within wgpu's default 256).
+        limits.max_compute_invocations_per_workgroup =
+            al.max_compute_invocations_per_workgroup.min(1024);
+        limits.max_compute_workgroup_size_x = al.max_compute_workgroup_size_x.min(1024);
         let features = if timestamps {
             wgpu::Features::TIMESTAMP_QUERY
         } else {

@@ -213,7 +213,10 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
             "erosion",
             "colouring",
             "ahead",
-            "search"
+            "search",
+            "search-one",
+            "group-512",
+            "group-1024"
         ]
     );
     for s in steps {
@@ -230,6 +233,15 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     // The per-item search's profile: in device.log alone.
     assert!(steps[8]["file"].is_null());
     assert!(device_log.contains("--search items"), "{device_log}");
+    // The search in one workgroup and the contact kernels at 512 and 1024 threads: the same.
+    for (k, flag) in [
+        (9, "--search one"),
+        (10, "--contact-group 512"),
+        (11, "--contact-group 1024"),
+    ] {
+        assert!(steps[k]["file"].is_null());
+        assert!(device_log.contains(flag), "{device_log}");
+    }
     assert_eq!(get("probe.json")["bandwidth"]["verified"], true);
     let block = get("bench_block.json").as_array().expect("the block rows");
     assert_eq!(block.len(), 1);
@@ -274,7 +286,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     let files = json_files(&dir);
     assert_eq!(files.len(), 1, "meta.json alone");
     let steps = files[0].1["steps"].as_array().expect("steps").clone();
-    assert_eq!(steps.len(), 9);
+    assert_eq!(steps.len(), 12);
     assert!(steps
         .iter()
         .all(|s| s["status"] == "skipped" && s["file"].is_null()));

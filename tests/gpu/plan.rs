@@ -257,6 +257,7 @@ fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
         // (The GPUs' colouring, which lavapipe does not take by default.)
         parallel_colouring: Some(true),
         search_one: None,
+        group: None,
         // (Each batch recorded ahead, which lavapipe does not do by default.)
         record_ahead: Some(true),
     };

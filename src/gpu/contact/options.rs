@@ -35,7 +35,8 @@ pub struct ContactOptions {
     /// needs more grows the buffer.
     pub candidate_capacity: Option<u32>,
     /// Threads of the one-workgroup contact kernels (the search's scans, the one-workgroup
-    /// solve, the reports' end), a power of two from 8 to 256; `None`: [`one_group`]. Every
+    /// solve, the reports' end), a power of two from 8 to the adapter's largest workgroup (at
+    /// most 1024); `None`: [`one_group`]. Every
     /// size gives the same node bits (their sums are of integers, or per constraint within a
     /// colour); only the reports' float sums change order.
     pub group: Option<u32>,

@@ -179,10 +179,17 @@ impl GpuSolver {
             contact_cap,
             contact_parallel_colouring,
         };
-        if !(8..=256).contains(&features.contact_group) || !features.contact_group.is_power_of_two()
+        let limits = ctx.device.limits();
+        let most = limits
+            .max_compute_invocations_per_workgroup
+            .min(limits.max_compute_workgroup_size_x)
+            .min(1024);
+        if !(8..=most).contains(&features.contact_group)
+            || !features.contact_group.is_power_of_two()
         {
             return Err(Error::Gpu(format!(
-                "contact group of {} threads: a power of two from 8 to 256",
+                "contact group of {} threads: a power of two from 8 to {most} (this adapter's \
+                 largest workgroup, at most 1024)",
                 features.contact_group
             )));
         }
