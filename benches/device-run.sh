@@ -10,6 +10,8 @@
 #   benches/device.sh .devbin/ricochet "$OUT"
 # so that the results land in $OUT/<date>_<adapter>/, which the tool brings back (copy that folder
 # into benches/results/ and commit it). RICOCHET_DEVICE_BUDGET (default 450 s) passes through.
+# Write nothing else under $OUT: the device tool brings back 8 files, the check writes 8 (on
+# 2026-11-28 a ninth file beside them kept profile.json from coming back).
 # Exit status: device.sh's, or 2 without the binary, 4 without an NVIDIA adapter.
 set -uo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.." || exit 2
