@@ -27,12 +27,14 @@
 #               steps recorded only after the readback of the one before (`--no-record-ahead`,
 #               the host's way before 2026-11-28), beside steps 3 and 4, where it is recorded while
 #               the device runs the one before: its table in device.log only      -> device.log
-#   9. search   the profile of the striker at 10^4 and 10^5 with the contact search in its
-#               eleven per-item kernels (`--search items`, the GPUs' default beyond 1 024 contact
-#               nodes or slots: the 10^5 striker's in step 5)                     -> device.log
+#   9. search   the profile of the striker and the pile at 10^4 and 10^5 with the contact search
+#               in its eleven per-item kernels (`--search items`, the GPUs' default beyond 8 192
+#               contact nodes or slots, and between 1 024 and 8 192 while searches are frequent:
+#               the 10^5 striker's in step 5)                                     -> device.log
 #  10. search-one the same with the search in one workgroup (`--search one`, the GPUs' default
-#               up to 1 024: the 10^4 striker's in step 5): steps 9 and 10 set the two side by
-#               side at both sizes, in device.log only                            -> device.log
+#               up to 1 024, and up to 8 192 while searches are rare: the 10^4 striker's and
+#               pile's in step 5): steps 9 and 10 set the two side by side, in device.log only
+#                                                                                 -> device.log
 #  11. group-512 the profile of the striker and the pile at 10^4, 10^5, 10^6 with the
 #               one-workgroup contact kernels at 512 threads (`--contact-group 512`), beside
 #               step 5's 256 (the GPUs' default)                                  -> device.log
@@ -248,7 +250,7 @@ else
   FAILURE=(--warmup 100 --steps 200 --rounds 3)
   COLOURING=(--scene striker --elements 100000 1000000 --warmup 600 --steps 200)
   AHEAD=(--elements 10000 100000)
-  SEARCH=(--scene striker --elements 10000 100000 --warmup 600 --steps 200)
+  SEARCH=(--scene striker pile --elements 10000 100000 --warmup 600 --steps 200)
   GROUP=(--scene striker pile --elements 10000 100000 1000000 --warmup 600 --steps 200)
   NEED=(10 30 30 40 60 20 20 20 15 15 30 30)
 fi

@@ -164,8 +164,9 @@ pub struct BenchArgs {
     #[arg(long)]
     pub no_record_ahead: bool,
     /// How the GPU's contact search is dispatched (default: in one workgroup for small contact
-    /// sets on GPUs, per item on CPU adapters; `ricochet::gpu::contact::search::search_one_path`):
-    /// a comparison, for the tables and --profile.
+    /// sets on GPUs, and for larger ones while searches are rare; per item on CPU adapters;
+    /// `ricochet::gpu::contact::search::search_one_path`, `search_switch`): a comparison, for the
+    /// tables and --profile.
     #[arg(long, value_enum)]
     pub search: Option<BenchSearch>,
     /// Threads of the GPU's one-workgroup contact kernels (the one-workgroup solve, the

@@ -549,6 +549,110 @@ fn gpu_search_in_one_workgroup_gives_the_bits_of_the_per_item_search() {
     assert!(err.contains("search in one workgroup"), "{err}");
 }
 
+/// The search switching between its per-item kernels and one workgroup by the searches' rate
+/// (`ContactOptions::search_switch`, by default on GPUs between 1 024 and 8 192 contact nodes and
+/// slots): here every 32 steps (or the first readback after them). The pile, which searches once
+/// in about 256 steps, switches back and forth with one workgroup while a window had no search;
+/// the striker, whose searches go from 4 to 2 in 32 steps, to one workgroup once with fewer than
+/// 3. Each gives the per-item search's bits (and two runs the same bits); a switch
+/// with the search's way set, or with the per-colour solve, is refused.
+#[test]
+fn gpu_search_switching_between_its_ways_gives_the_bits_of_the_per_item_search() {
+    use ricochet::gpu::contact::SearchSwitch;
+    let Some(ctx) = context() else { return };
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let pile = asset("pile.toml").replace("end_time = 1.0e-3", "end_time = 1.5e-4");
+    let striker = asset("stress/striker_plate_gpu_energy.toml");
+    let switch = |searches| SearchSwitch {
+        window: 32,
+        searches,
+    };
+    for (name, text, switch, least) in [
+        ("pile", &pile, switch(1), 4),
+        ("striker", &striker, switch(3), 1),
+    ] {
+        let items = ContactOptions {
+            multi: Some(false),
+            search_one: Some(false),
+            ..ContactOptions::default()
+        };
+        let switching = ContactOptions {
+            multi: Some(false),
+            search_switch: Some(switch),
+            ..ContactOptions::default()
+        };
+        let (scene, model, plan) = load(text, &format!("{name}-switch"));
+        let mut gpu = GpuSolver::with_options(
+            ctx.clone(),
+            &model,
+            &plan,
+            schedule(&scene),
+            None,
+            switching,
+        )
+        .expect("gpu solver");
+        gpu.set_record_ahead(true);
+        let dir = tmp_dir(&format!("{name}-switch"));
+        let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("run");
+        let _ = std::fs::remove_dir_all(&dir);
+        assert_eq!(
+            r.summary.status, "completed",
+            "{name}: {}",
+            r.summary.message
+        );
+        let u = gpu.displacement_now().expect("displacement");
+        let switches = gpu.search_switches();
+        println!(
+            "{name}: {switches} switches, {} searches in {} steps, batches recorded ahead {:?}",
+            r.summary.contact_searches,
+            r.summary.steps,
+            gpu.recorded_ahead()
+        );
+        assert!(
+            switches >= least,
+            "{name}: the search switched {switches} times"
+        );
+        let (ri, _, ui, _) = run_gpu_with(&ctx, text, &format!("{name}-switch-items"), items);
+        assert_same_bits(
+            (&ri, &ui),
+            (&r, &u),
+            &format!("{name}: the switching search differs from the per-item one"),
+        );
+        let (r2, _, u2, _) = run_gpu_with(&ctx, text, &format!("{name}-switch-2"), switching);
+        assert_same_bits(
+            (&r, &u),
+            (&r2, &u2),
+            &format!("{name}: two switching runs differ"),
+        );
+    }
+    let (scene, model, plan) = load(&pile, "pile-switch-bad");
+    for (options, says) in [
+        (
+            ContactOptions {
+                search_one: Some(true),
+                search_switch: Some(switch(1)),
+                ..ContactOptions::default()
+            },
+            "whose way is set",
+        ),
+        (
+            ContactOptions {
+                multi: Some(true),
+                search_switch: Some(switch(1)),
+                ..ContactOptions::default()
+            },
+            "one-workgroup solve",
+        ),
+    ] {
+        let err =
+            GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
+                .err()
+                .map(|e| e.to_string())
+                .unwrap_or_default();
+        assert!(err.contains(says), "{err}");
+    }
+}
+
 /// The one-workgroup contact kernels (the search's scans, the solve, the reports' end) at 8, 64,
 /// 256 and 1024 threads: 8 is the CPU adapters' size and 256 the GPUs' (`contact::one_group`), so
 /// this runs the GPUs' size on lavapipe too, and 1024 the largest a group may be (where the

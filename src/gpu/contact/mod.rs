@@ -41,7 +41,7 @@ pub mod tables;
 pub use crate::gpu::shader::local_constraints;
 pub use kernels::{stage_source, ContactKernels, MODULES};
 pub(crate) use options::Path;
-pub use options::{one_group, parallel_colouring, ContactOptions};
+pub use options::{one_group, parallel_colouring, ContactOptions, SearchSwitch};
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
@@ -388,8 +388,12 @@ pub struct ContactState {
     pub grows: u32,
     /// The stage in one workgroup before the search and one after it ([`one`]).
     one: bool,
-    /// The search in one workgroup ([`search::search_one_path`]).
+    /// The search in one workgroup ([`search::search_one_path`]; as last switched).
     search_one: bool,
+    /// The search's switch between its two ways, if it has one, with the step and the searches
+    /// at the start of its window, and the switches so far.
+    search_switch: Option<(SearchSwitch, u32, u32)>,
+    search_switches: u64,
     /// Eroding contact (a scene with failure): the fixed candidate lists, the model whose
     /// surfaces they follow, and the slots and segments as last written to the device.
     eroding: Option<erosion::Eroding>,
@@ -443,6 +447,7 @@ impl ContactState {
             extrapolate,
             one,
             search_one,
+            search_switch,
         } = path;
         let masked = if model.has_erosion() {
             Some(Masked::new(model, &set).ok_or_else(|| erosion::unfollowed("build"))?)
@@ -617,8 +622,39 @@ impl ContactState {
             grows: 0,
             one,
             search_one,
+            search_switch: search_switch.map(|s| (s, 0, 0)),
+            search_switches: 0,
             eroding,
         })
+    }
+
+    /// After a readback at step `step` (the counters just read): at the end of the search
+    /// switch's window, the next steps search in one workgroup when the window's searches were
+    /// fewer than its rate a step, else per item ([`SearchSwitch`]). Returns whether the way
+    /// changed (the commands a step records change with it).
+    pub(crate) fn switch_search(&mut self, step: u32) -> bool {
+        let Some((s, from, searches)) = self.search_switch else {
+            return false;
+        };
+        let steps = step.saturating_sub(from);
+        if steps < s.window {
+            return false;
+        }
+        let now = self.counters.searches;
+        let one = u64::from(now.saturating_sub(searches)) * u64::from(s.window)
+            < u64::from(s.searches) * u64::from(steps);
+        self.search_switch = Some((s, step, now));
+        if one == self.search_one {
+            return false;
+        }
+        self.search_one = one;
+        self.search_switches += 1;
+        true
+    }
+
+    /// Times the search switched its way so far ([`ContactState::switch_search`]).
+    pub fn search_switches(&self) -> u64 {
+        self.search_switches
     }
 
     /// The penalty springs' stable step and what sets it.

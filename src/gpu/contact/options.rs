@@ -53,6 +53,24 @@ pub struct ContactOptions {
     /// steps (`Some(false)`); `None`: [`super::search::search_one_path`]. Not with the
     /// per-colour solve. The same bits either way.
     pub search_one: Option<bool>,
+    /// How the search switches between its two ways by the rate of the searches
+    /// ([`SearchSwitch`]); `None`: [`search::search_switch`] (on GPUs, for contact sets between
+    /// [`search::SEARCH_ONE_ITEMS`] and [`search::SEARCH_ONE_RARE_ITEMS`] nodes and slots). Not
+    /// with `search_one` set. The same bits either way.
+    pub search_switch: Option<SearchSwitch>,
+}
+
+/// The search's switch between its per-item kernels, which cost their empty dispatches on every
+/// step that does not search, and one workgroup, which costs more on the steps that do: over each
+/// `window` steps (or the first readback after them) the host counts the searches, and the next
+/// steps search in one workgroup when they were fewer than `searches` in `window` steps, else per
+/// item. Both ways give the same bits (tested), so the switch changes only the time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SearchSwitch {
+    /// Steps over which the searches are counted (at least 1).
+    pub window: u32,
+    /// Searches in `window` steps below which the search runs in one workgroup.
+    pub searches: u32,
 }
 
 /// Whether the one-workgroup solve colours in parallel rounds on an adapter of `device_type`:
@@ -101,8 +119,11 @@ pub(crate) struct Path {
     pub extrapolate: bool,
     /// The stage in one workgroup before the search and one after it ([`one`]).
     pub one: bool,
-    /// The search in one workgroup ([`search::search_one_path`]).
+    /// The search in one workgroup ([`search::search_one_path`]), at the start.
     pub search_one: bool,
+    /// Whether and how the search switches between its two ways as the run goes
+    /// ([`SearchSwitch`]).
+    pub search_switch: Option<SearchSwitch>,
 }
 
 impl Path {
@@ -159,12 +180,39 @@ impl Path {
                  contact has {nodes} nodes and {slots} slots"
             )));
         }
+        let search_switch = match (options.search_one, options.search_switch) {
+            (Some(_), Some(_)) => {
+                return Err(Error::Gpu(
+                    "the search's switch is not for a search whose way is set".into(),
+                ))
+            }
+            (Some(_), None) => None,
+            (None, Some(s)) => Some(s),
+            (None, None) => search::search_switch(nodes, slots, device_type).filter(|_| !multi),
+        };
+        if let Some(s) = search_switch {
+            if multi || s.window == 0 {
+                return Err(Error::Gpu(format!(
+                    "the search's switch (window {}) needs a window of at least one step and the \
+                     one-workgroup solve",
+                    s.window
+                )));
+            }
+            if device_type == wgpu::DeviceType::Cpu && nodes.max(slots) > most {
+                return Err(Error::Gpu(format!(
+                    "the search's switch on a CPU adapter takes at most {most} contact nodes and \
+                     slots (llvmpipe ends a shader's loops after 65 535 iterations in all); this \
+                     contact has {nodes} nodes and {slots} slots"
+                )));
+            }
+        }
         Ok(Path {
             multi,
             split,
             extrapolate: !options.plain_sweeps,
             one,
             search_one,
+            search_switch,
         })
     }
 }
@@ -187,6 +235,59 @@ mod tests {
             }
             assert!(Path::choose(&o, nodes, slots, wgpu::DeviceType::DiscreteGpu).is_ok());
         }
+    }
+
+    /// The search's switch: by default on a GPU beyond [`search::SEARCH_ONE_ITEMS`] and up to
+    /// [`search::SEARCH_ONE_RARE_ITEMS`] (starting per item), never on a CPU adapter nor with the
+    /// search's way set; asked for, on a CPU adapter only up to [`search::SEARCH_ONE_CPU_MAX`].
+    #[test]
+    fn the_search_switches_where_it_may() {
+        let o = ContactOptions {
+            multi: Some(false),
+            ..ContactOptions::default()
+        };
+        let gpu = wgpu::DeviceType::DiscreteGpu;
+        let cpu = wgpu::DeviceType::Cpu;
+        let path = |o: &ContactOptions, n: usize, d| {
+            Path::choose(o, n, n, d).map(|p| (p.search_one, p.search_switch))
+        };
+        let (below, low, high, over) = (
+            search::SEARCH_ONE_ITEMS,
+            search::SEARCH_ONE_ITEMS + 1,
+            search::SEARCH_ONE_RARE_ITEMS,
+            search::SEARCH_ONE_RARE_ITEMS + 1,
+        );
+        let default = Some(search::SEARCH_SWITCH);
+        assert_eq!(path(&o, below, gpu).ok(), Some((true, None)));
+        assert_eq!(path(&o, low, gpu).ok(), Some((false, default)));
+        assert_eq!(path(&o, high, gpu).ok(), Some((false, default)));
+        assert_eq!(path(&o, over, gpu).ok(), Some((false, None)));
+        assert_eq!(path(&o, low, cpu).ok(), Some((false, None)));
+        let set = ContactOptions {
+            search_one: Some(false),
+            ..o
+        };
+        assert_eq!(path(&set, low, gpu).ok(), Some((false, None)));
+        let asked = ContactOptions {
+            search_switch: Some(SearchSwitch {
+                window: 4,
+                searches: 1,
+            }),
+            ..o
+        };
+        assert_eq!(
+            path(&asked, search::SEARCH_ONE_CPU_MAX, cpu).ok(),
+            Some((false, asked.search_switch))
+        );
+        assert!(path(&asked, search::SEARCH_ONE_CPU_MAX + 1, cpu).is_err());
+        let zero = ContactOptions {
+            search_switch: Some(SearchSwitch {
+                window: 0,
+                searches: 1,
+            }),
+            ..o
+        };
+        assert!(path(&zero, 10, gpu).is_err());
     }
 
     /// The search in one workgroup: by default on a GPU up to [`search::SEARCH_ONE_ITEMS`] and

@@ -52,6 +52,38 @@ const _: () = assert!(matches!(ENTRIES[LIST_FILL].as_bytes(), b"list_fill"));
 /// kernels' time grows by about 0.006 us an item: the two meet near 1 100 items.
 pub const SEARCH_ONE_ITEMS: usize = 1 << 10;
 
+/// Contact nodes and slots (the larger) up to which a GPU switches its search into one workgroup
+/// while searches are rare ([`search_switch`]). On an NVIDIA H200 (2026-11-28, 1350d3a) the
+/// 10^4-element pile (100 disks, about 3 600 contact nodes), which searched about once in 500
+/// steps, took 14.5 us a step in the per-item kernels' search part and 6.3 us in one workgroup
+/// (`step dev` 95.9 against 88.2 us); the 10^5 pile (about 36 000) 16.8 against 18.2 us, one search
+/// in one workgroup then costing about 6.7 ms.
+pub const SEARCH_ONE_RARE_ITEMS: usize = 1 << 13;
+
+/// The default [`super::SearchSwitch`]: searches counted over 512 steps, one workgroup below one
+/// search in 64 steps. The striker searches about once in 7 steps, the pile once in 500; by the
+/// H200 figures above, a search in one workgroup of 8 192 items costs about 1 ms more than per
+/// item, and the per-item kernels' empty dispatches about 13 us a step more than one workgroup's:
+/// break-even near one search in 80 steps.
+pub const SEARCH_SWITCH: super::SearchSwitch = super::SearchSwitch {
+    window: 512,
+    searches: 8,
+};
+
+/// Whether (and how) the search of `nodes` contact nodes and `slots` slots on an adapter of
+/// `device_type` switches between its two ways by the searches' rate, by default: on GPUs between
+/// [`SEARCH_ONE_ITEMS`] (below it always one workgroup) and [`SEARCH_ONE_RARE_ITEMS`] (beyond it
+/// always per item), with [`SEARCH_SWITCH`]; never on CPU adapters.
+pub fn search_switch(
+    nodes: usize,
+    slots: usize,
+    device_type: wgpu::DeviceType,
+) -> Option<super::SearchSwitch> {
+    let n = nodes.max(slots);
+    (device_type != wgpu::DeviceType::Cpu && n > SEARCH_ONE_ITEMS && n <= SEARCH_ONE_RARE_ITEMS)
+        .then_some(SEARCH_SWITCH)
+}
+
 /// The most contact nodes and slots (the larger) with which a CPU adapter may be asked to search
 /// in one workgroup ([`super::ContactOptions::search_one`]; it does not by default). llvmpipe
 /// (lavapipe) ends a shader invocation's loops after 65 535 iterations in all

@@ -42,11 +42,17 @@ impl GpuSolver {
         let (bytes, spec) = self.map_with_rows(&readback)?;
         self.counters.readbacks += 1;
         let ctrl: Control = bytemuck::pod_read_unaligned(&bytes[..std::mem::size_of::<Control>()]);
+        let mut switched = false;
         if let Some(c) = self.state.contact.as_mut() {
             let at = self.counters_at as usize;
             c.counters = bytemuck::pod_read_unaligned(
                 &bytes[at..at + std::mem::size_of::<ContactCounters>()],
             );
+            switched = c.switch_search(ctrl.step);
+        }
+        if switched {
+            // The batch recorded ahead searches the other way.
+            self.drop_recorded_ahead();
         }
         let stride = self.state.params.row_stride as usize;
         let cstride = self

@@ -59,6 +59,15 @@ impl GpuSolver {
         self.ahead
     }
 
+    /// Times the contact search switched between its per-item kernels and one workgroup
+    /// ([`crate::gpu::contact::SearchSwitch`]) so far; 0 without contact or a switch.
+    pub fn search_switches(&self) -> u64 {
+        self.state
+            .contact
+            .as_ref()
+            .map_or(0, |c| c.search_switches())
+    }
+
     /// Drops the batch recorded ahead, if any: called wherever the host changes a buffer or bind
     /// group that the recorded commands name, or the commands a step records.
     pub(super) fn drop_recorded_ahead(&mut self) {
