@@ -43,6 +43,17 @@ fn run_gpu_with(
     name: &str,
     options: ContactOptions,
 ) -> (RunResult, Model, Vec<[f64; 2]>, u32) {
+    let (r, model, u, gpu) = run_gpu_solver(ctx, text, name, options);
+    (r, model, u, gpu.contact_grows())
+}
+
+/// [`run_gpu_with`], giving the solver back (for its counts).
+fn run_gpu_solver(
+    ctx: &Arc<GpuContext>,
+    text: &str,
+    name: &str,
+    options: ContactOptions,
+) -> (RunResult, Model, Vec<[f64; 2]>, GpuSolver) {
     let (scene, model, plan) = load(text, name);
     let mut gpu =
         GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
@@ -59,8 +70,7 @@ fn run_gpu_with(
         r.summary.message
     );
     let u = gpu.displacement_now().expect("displacement");
-    let grows = gpu.contact_grows();
-    (r, model, u, grows)
+    (r, model, u, gpu)
 }
 
 /// Runs scene text on the CPU reference: the result and the final displacements.
@@ -581,26 +591,7 @@ fn gpu_search_switching_between_its_ways_gives_the_bits_of_the_per_item_search()
             search_switch: Some(switch),
             ..ContactOptions::default()
         };
-        let (scene, model, plan) = load(text, &format!("{name}-switch"));
-        let mut gpu = GpuSolver::with_options(
-            ctx.clone(),
-            &model,
-            &plan,
-            schedule(&scene),
-            None,
-            switching,
-        )
-        .expect("gpu solver");
-        gpu.set_record_ahead(true);
-        let dir = tmp_dir(&format!("{name}-switch"));
-        let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("run");
-        let _ = std::fs::remove_dir_all(&dir);
-        assert_eq!(
-            r.summary.status, "completed",
-            "{name}: {}",
-            r.summary.message
-        );
-        let u = gpu.displacement_now().expect("displacement");
+        let (r, _, u, gpu) = run_gpu_solver(&ctx, text, &format!("{name}-switch"), switching);
         let switches = gpu.search_switches();
         println!(
             "{name}: {switches} switches, {} searches in {} steps, batches recorded ahead {:?}",
