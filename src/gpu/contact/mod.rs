@@ -652,7 +652,7 @@ impl ContactState {
         true
     }
 
-    /// Times the search switched its way so far ([`ContactState::switch_search`]).
+    /// Times the search switched its way so far ([`SearchSwitch`]).
     pub fn search_switches(&self) -> u64 {
         self.search_switches
     }
