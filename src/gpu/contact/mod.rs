@@ -628,35 +628,6 @@ impl ContactState {
         })
     }
 
-    /// After a readback at step `step` (the counters just read): at the end of the search
-    /// switch's window, the next steps search in one workgroup when the window's searches were
-    /// fewer than its rate a step, else per item ([`SearchSwitch`]). Returns whether the way
-    /// changed (the commands a step records change with it).
-    pub(crate) fn switch_search(&mut self, step: u32) -> bool {
-        let Some((s, from, searches)) = self.search_switch else {
-            return false;
-        };
-        let steps = step.saturating_sub(from);
-        if steps < s.window {
-            return false;
-        }
-        let now = self.counters.searches;
-        let one = u64::from(now.saturating_sub(searches)) * u64::from(s.window)
-            < u64::from(s.searches) * u64::from(steps);
-        self.search_switch = Some((s, step, now));
-        if one == self.search_one {
-            return false;
-        }
-        self.search_one = one;
-        self.search_switches += 1;
-        true
-    }
-
-    /// Times the search switched its way so far ([`SearchSwitch`]).
-    pub fn search_switches(&self) -> u64 {
-        self.search_switches
-    }
-
     /// The penalty springs' stable step and what sets it.
     pub fn penalty_step(&self) -> Option<(f64, &str)> {
         self.set.penalty_step()

@@ -104,6 +104,37 @@ pub fn search_one_path(nodes: usize, slots: usize, device_type: wgpu::DeviceType
     device_type != wgpu::DeviceType::Cpu && nodes.max(slots) <= SEARCH_ONE_ITEMS
 }
 
+impl super::ContactState {
+    /// After a readback at step `step` (the counters just read): at the end of the search
+    /// switch's window, the next steps search in one workgroup when the window had fewer than
+    /// the switch's searches per its window of steps, else per item ([`super::SearchSwitch`]).
+    /// Returns whether the way changed (the commands a step records change with it).
+    pub(crate) fn switch_search(&mut self, step: u32) -> bool {
+        let Some((s, from, searches)) = self.search_switch else {
+            return false;
+        };
+        let steps = step.saturating_sub(from);
+        if steps < s.window {
+            return false;
+        }
+        let now = self.counters.searches;
+        let one = u64::from(now.saturating_sub(searches)) * u64::from(s.window)
+            < u64::from(s.searches) * u64::from(steps);
+        self.search_switch = Some((s, step, now));
+        if one == self.search_one {
+            return false;
+        }
+        self.search_one = one;
+        self.search_switches += 1;
+        true
+    }
+
+    /// Times the search switched its way so far ([`super::SearchSwitch`]).
+    pub fn search_switches(&self) -> u64 {
+        self.search_switches
+    }
+}
+
 /// The layout of group 1 of the kernels that write indirect sizes (`plan`, `scan_lists`, and
 /// `prep_one` of [`super::one`]): the indirect-argument buffer.
 pub(crate) fn indirect_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
