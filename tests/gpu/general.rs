@@ -73,6 +73,18 @@ fn run_gpu_solver(
     (r, model, u, gpu)
 }
 
+/// The error a GPU solver of `scene` with `options` is refused with ("" when it is built).
+fn refusal(
+    ctx: &Arc<GpuContext>,
+    (scene, model, plan): &(Scene, Model, Plan),
+    options: ContactOptions,
+) -> String {
+    GpuSolver::with_options(ctx.clone(), model, plan, schedule(scene), None, options)
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default()
+}
+
 /// Runs scene text on the CPU reference: the result and the final displacements.
 fn run_cpu(text: &str, name: &str) -> (RunResult, Vec<[f64; 2]>) {
     let (scene, model, plan) = load(text, name);
@@ -476,7 +488,7 @@ fn gpu_one_workgroup_contact_stage_matches_the_per_item_kernels() {
         assert!(p.ra.summary.contact_sweeps_max > 0, "{name}: the solve ran");
     }
     // One workgroup takes neither the per-colour solve nor split re-checks.
-    let (scene, model, plan) = load(&asset("pile.toml"), "pile.toml");
+    let loaded = load(&asset("pile.toml"), "pile.toml");
     for (multi, split) in [(true, false), (false, true)] {
         let options = ContactOptions {
             multi: Some(multi),
@@ -484,11 +496,7 @@ fn gpu_one_workgroup_contact_stage_matches_the_per_item_kernels() {
             one: Some(true),
             ..ContactOptions::default()
         };
-        let err =
-            GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
-                .err()
-                .map(|e| e.to_string())
-                .unwrap_or_default();
+        let err = refusal(&ctx, &loaded, options);
         assert!(err.contains("one workgroup"), "{err}");
     }
 }
@@ -546,16 +554,13 @@ fn gpu_search_in_one_workgroup_gives_the_bits_of_the_per_item_search() {
         (&rs, &us),
         "the run grown in one workgroup differs",
     );
-    let (scene, model, plan) = load(&pile, "pile.toml");
+    let loaded = load(&pile, "pile.toml");
     let options = ContactOptions {
         multi: Some(true),
         search_one: Some(true),
         ..ContactOptions::default()
     };
-    let err = GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
-        .err()
-        .map(|e| e.to_string())
-        .unwrap_or_default();
+    let err = refusal(&ctx, &loaded, options);
     assert!(err.contains("search in one workgroup"), "{err}");
 }
 
@@ -616,7 +621,7 @@ fn gpu_search_switching_between_its_ways_gives_the_bits_of_the_per_item_search()
             &format!("{name}: two switching runs differ"),
         );
     }
-    let (scene, model, plan) = load(&pile, "pile-switch-bad");
+    let loaded = load(&pile, "pile-switch-bad");
     for (options, says) in [
         (
             ContactOptions {
@@ -635,11 +640,7 @@ fn gpu_search_switching_between_its_ways_gives_the_bits_of_the_per_item_search()
             "one-workgroup solve",
         ),
     ] {
-        let err =
-            GpuSolver::with_options(ctx.clone(), &model, &plan, schedule(&scene), None, options)
-                .err()
-                .map(|e| e.to_string())
-                .unwrap_or_default();
+        let err = refusal(&ctx, &loaded, options);
         assert!(err.contains(says), "{err}");
     }
 }
@@ -705,19 +706,9 @@ fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
             &format!("{name}: two runs at 256 threads differ"),
         );
     }
-    let (scene, model, plan) = load(&asset("pile.toml"), "pile-group-bad");
+    let loaded = load(&asset("pile.toml"), "pile-group-bad");
     for bad in [4, 96, 2048] {
-        let e = GpuSolver::with_options(
-            ctx.clone(),
-            &model,
-            &plan,
-            schedule(&scene),
-            None,
-            with(bad),
-        )
-        .err()
-        .map(|e| e.to_string())
-        .unwrap_or_default();
+        let e = refusal(&ctx, &loaded, with(bad));
         assert!(
             e.contains(&format!("contact group of {bad} threads")),
             "{bad} threads: {e}"
