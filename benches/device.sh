@@ -39,6 +39,9 @@
 #               one-workgroup contact kernels at 512 threads (`--contact-group 512`), beside
 #               step 5's 256 (the GPUs' default)                                  -> device.log
 #  12. group-1024 the same at 1024 threads                                        -> device.log
+#  13. pairs    the profile of the striker at 10^4, 10^5 and 10^6 with the one-workgroup solve's
+#               2 x 2 blocks of node pairs (`--pair-blocks`, not the default: f32 fails the
+#               patch test with them), beside step 5's constraints one by one        -> device.log
 # The JSON files are the binary's own (`ricochet bench --json`, `--probe`, `--profile`). With them,
 # meta.json (date, commit, the binary's version, adapter, driver, nvidia-smi, each step's command,
 # status, exit code and seconds, the steps skipped) and device.log (all that was printed) go to
@@ -89,6 +92,7 @@
 #   search   800 steps each of the striker at 10^4 and 10^5, two models: about 10 s      [60 s]
 #   search-one likewise                                                                   [60 s]
 #   group-512, group-1024  as step 5's contact scenes: about 10 s each                 [90 s]
+#   pairs    800 steps each of the striker at 10^4, 10^5, 10^6: about 15 s             [60 s]
 # About 3.5-4 minutes in all by these estimates; on an NVIDIA H200 on 2026-11-28 (c2f47a1) the
 # first nine steps took 52 s, the call 84 s of device time with the machine's start; the caps and the default budget (450 s) keep the call inside the
 # device tool's 8 minutes for the script (10 minutes a call) even when a step hangs.
@@ -237,7 +241,8 @@ if [ "$SMALL" = 1 ]; then
   AHEAD=(--elements 400)
   SEARCH=(--scene striker --elements 400 --warmup 10 --steps 10)
   GROUP=(--scene striker --elements 400 --warmup 10 --steps 10)
-  NEED=(5 5 5 5 5 5 5 5 5 5 5 5)
+  PAIRS=(--scene striker --elements 400 --warmup 10 --steps 10)
+  NEED=(5 5 5 5 5 5 5 5 5 5 5 5 5)
 else
   PROBE=(--probe-mib 512 --probe-dispatches 1000 --rounds 10)
   CELLS=(316 1000)
@@ -252,7 +257,8 @@ else
   AHEAD=(--elements 10000 100000)
   SEARCH=(--scene striker pile --elements 10000 100000 --warmup 600 --steps 200)
   GROUP=(--scene striker pile --elements 10000 100000 1000000 --warmup 600 --steps 200)
-  NEED=(10 30 30 40 60 20 20 20 15 15 30 30)
+  PAIRS=(--scene striker --elements 10000 100000 1000000 --warmup 600 --steps 200)
+  NEED=(10 30 30 40 60 20 20 20 15 15 30 30 20)
 fi
 
 say "device check: $BIN ($VERSION, commit $COMMIT) into $OUT_DIR, budget $BUDGET s"
@@ -300,6 +306,8 @@ run_step group-512 "${NEED[10]}" 90 - \
   "$BIN" bench --profile "${GROUP[@]}" --contact-group 512
 run_step group-1024 "${NEED[11]}" 90 - \
   "$BIN" bench --profile "${GROUP[@]}" --contact-group 1024
+run_step pairs "${NEED[12]}" 60 - \
+  "$BIN" bench --profile "${PAIRS[@]}" --pair-blocks
 
 say "done: $DIR ($([ "$FAILED" = 0 ] && echo "every step ran" || echo "see meta.json: not every step ran"))"
 [ "$FAILED" = 0 ] || exit 3

@@ -5,6 +5,154 @@
 
 // Colours of the one-workgroup solve: at most 32 by node masks, then one serial colour.
 const SERIAL: u32 = 32u;
+// The "colour" of a paired constraint's partner: listed after the serial colour, swept with its
+// leader (`pair_constraints`), never on its own.
+const PARTNER: u32 = SERIAL + 1u;
+// Pair codes per slot (ws[o_pair..], `pair_constraints`): the leader (the lower slot) or the
+// partner of a pair, with the other's index in the compacted list ws[o_color..]; 0 unpaired.
+const PAIR_LEADER: u32 = 0x80000000u;
+const PAIR_PARTNER: u32 = 0x40000000u;
+const PAIR_INDEX: u32 = 0x3fffffffu;
+
+// Whether the constraint of slot k can be solved in a 2 x 2 block (ContactSet::pair_blocks):
+// Lagrange, frictionless, against a segment.
+fn pairable(k: u32) -> bool {
+    let c = cons[k];
+    return c.kind == KIND_LAGRANGE && c.a != NONE && c.w > 0.0 && !(c.mu > 0.0);
+}
+
+// Node t (0 slave, 1 and 2 segment ends) of the constraint of slot k, and its share of an impulse.
+fn share_of(c: Cons, t: u32) -> f32 {
+    if (t == 0u) {
+        return 1.0;
+    }
+    if (t == 1u) {
+        return -(1.0 - c.xi);
+    }
+    return -c.xi;
+}
+
+// How closely the constraints of slots k and k2 couple (ContactSet::pair_blocks' score): the
+// change of one's gap per unit impulse of the other over the square root of their own (up to
+// the factor dt / the mass scale, the same for every pair).
+fn pair_score(k: u32, k2: u32) -> f32 {
+    let c = cons[k];
+    let d = cons[k2];
+    var w = 0.0;
+    for (var t = 0u; t < 3u; t++) {
+        let i = ref_node(k, t);
+        for (var u = 0u; u < 3u; u++) {
+            if (ref_node(k2, u) == i) {
+                let im = c_ref[i].zw;
+                w += share_of(c, t) * share_of(d, u) * (c.n.x * d.n.x * im.x + c.n.y * d.n.y * im.y);
+            }
+        }
+    }
+    return abs(w) / sqrt(c.w * d.w);
+}
+
+// The constraint of slot k's best partner for a 2 x 2 block (NONE: none): among the pairable
+// constraints of its interface whose slave is an end of its segment and whose segment has its
+// slave as an end (the same contact met from both passes), the one that couples most closely,
+// the lower slot on a tie. Found through the search's node adjacency of its segment's ends.
+fn best_partner(k: u32) -> u32 {
+    if (!pairable(k)) {
+        return NONE;
+    }
+    let c = cons[k];
+    let s = slots[k].s;
+    let iface = slots[k].info & 0xffffu;
+    let b = cc.p.cand_capacity;
+    var best = NONE;
+    var score = -1.0;
+    for (var e = 1u; e < 3u; e++) {
+        let m = ref_node(k, e);
+        let end = ws[cc.p.o_noff + m + 1u];
+        for (var q = ws[cc.p.o_noff + m]; q < end; q++) {
+            let k2 = grow[b + q];
+            if (k2 == k || slots[k2].s != m || (slots[k2].info & 0xffffu) != iface) {
+                continue;
+            }
+            if (!pairable(k2) || (cons[k2].a != s && cons[k2].b != s)) {
+                continue;
+            }
+            let x = pair_score(k, k2);
+            if (x > score || (x == score && k2 < best)) {
+                best = k2;
+                score = x;
+            }
+        }
+    }
+    return best;
+}
+
+// The index of slot k in the compacted list ws[o_color..] of na slots (in slot order).
+fn compacted_index(k: u32, na: u32) -> u32 {
+    var lo = 0u;
+    var hi = na;
+    while (lo < hi) {
+        let mid = (lo + hi) / 2u;
+        if (ws[cc.p.o_color + mid] < k) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+// The 2 x 2 blocks of the sweeps (with cc.p.pairs; ContactSet::pair_blocks): two constraints
+// each other's best partner (`best_partner`) are a pair, its lower slot the leader, which is
+// coloured with both constraints' nodes and sweeps both, its partner listed after the serial
+// colour (PARTNER). Each compacted slot's pair code into ws[o_pair..] (0 when unpaired). Mutual
+// best partners, where the CPU reference pairs greedily by score: the same pairs on every run,
+// in any thread order, from neighbours alone.
+fn pair_constraints(l: u32, na: u32) {
+    let pairs = cc.p.pairs != 0u;
+    if (pairs) {
+        for (var j = l; j < na; j += SG) {
+            let k = ws[cc.p.o_color + j];
+            ws[cc.p.o_best + k] = best_partner(k);
+        }
+        storageBarrier();
+        workgroupBarrier();
+    }
+    for (var j = l; j < na; j += SG) {
+        let k = ws[cc.p.o_color + j];
+        var code = 0u;
+        if (pairs) {
+            let b = ws[cc.p.o_best + k];
+            if (b != NONE && ws[cc.p.o_best + b] == k) {
+                code = select(PAIR_PARTNER, PAIR_LEADER, k < b) | compacted_index(b, na);
+            }
+        }
+        ws[cc.p.o_pair + k] = code;
+    }
+    storageBarrier();
+    workgroupBarrier();
+}
+
+// The pair code of compacted constraint j.
+fn pair_code(j: u32) -> u32 {
+    return ws[cc.p.o_pair + ws[cc.p.o_color + j]];
+}
+
+// The slot of the other constraint of pair code `code` (a leader's or partner's).
+fn paired_slot(code: u32) -> u32 {
+    return ws[cc.p.o_color + (code & PAIR_INDEX)];
+}
+
+// Reference t (0 to 5) of the colouring unit of compacted constraint j with pair code `code`:
+// its own three (t < 3), then a leader's partner's (NONE when unpaired), in workgroup memory.
+fn unit_key(j: u32, t: u32, code: u32) -> u32 {
+    if (t < 3u) {
+        return sh_ref[3u * j + t];
+    }
+    if ((code & PAIR_LEADER) == 0u) {
+        return NONE;
+    }
+    return sh_ref[3u * (code & PAIR_INDEX) + t - 3u];
+}
 
 // Whether the one-workgroup solve colours in parallel rounds in a hashed order (host-set:
 // crate::gpu::shader::Features::contact_parallel_colouring), or greedily in slot order.
@@ -82,6 +230,7 @@ fn compact(l: u32) {
     }
     storageBarrier();
     let na = workgroupUniformLoad(&sh_total);
+    pair_constraints(l, na);
     var local = na <= CAP;
     if (local) {
         local = compact_local(l, na);
@@ -127,12 +276,12 @@ fn ref_node(k: u32, t: u32) -> u32 {
     return cons[k].b;
 }
 
-// Constraint j (`compact_local`) takes the first colour free in `used`, its keys' masks, and
-// marks it there.
-fn colour_local(j: u32, used: u32) {
+// Constraint j (`compact_local`, pair code `code`) takes the first colour free in `used`, its
+// unit's keys' masks, and marks it there.
+fn colour_local(j: u32, used: u32, code: u32) {
     let col = first_free(used);
-    for (var t = 0u; t < 3u; t++) {
-        let key = sh_ref[3u * j + t];
+    for (var t = 0u; t < 6u; t++) {
+        let key = unit_key(j, t, code);
         if (key != NONE) {
             atomicOr(&sh_key[key], colour_bit(col));
         }
@@ -224,28 +373,35 @@ fn compact_local(l: u32, na: u32) -> bool {
         // Greedy in slot order, in invocation 0.
         if (l == 0u) {
             for (var j = 0u; j < na; j++) {
+                let code = pair_code(j);
+                if ((code & PAIR_PARTNER) != 0u) {
+                    sh_cr[j] = PARTNER;
+                    continue;
+                }
                 var used = 0u;
-                for (var t = 0u; t < 3u; t++) {
-                    let key = sh_ref[3u * j + t];
+                for (var t = 0u; t < 6u; t++) {
+                    let key = unit_key(j, t, code);
                     if (key != NONE) {
                         used |= atomicLoad(&sh_key[key]);
                     }
                 }
-                colour_local(j, used);
+                colour_local(j, used, code);
             }
         }
         workgroupBarrier();
         return true;
     }
+    // (A partner's sh_cr is PARTNER from the start: neither a rank nor a colour of the sweeps.)
     for (var j = l; j < na; j += SG) {
-        sh_cr[j] = local_rank(j);
+        sh_cr[j] = select(local_rank(j), PARTNER, (pair_code(j) & PAIR_PARTNER) != 0u);
     }
     workgroupBarrier();
     loop {
         for (var j = l; j < na; j += SG) {
-            if (sh_cr[j] > SERIAL) {
-                for (var t = 0u; t < 3u; t++) {
-                    let key = sh_ref[3u * j + t];
+            if (sh_cr[j] > PARTNER) {
+                let code = pair_code(j);
+                for (var t = 0u; t < 6u; t++) {
+                    let key = unit_key(j, t, code);
                     if (key != NONE) {
                         atomicStore(&sh_key[NODE_CAP + key], 0u);
                     }
@@ -255,9 +411,10 @@ fn compact_local(l: u32, na: u32) -> bool {
         workgroupBarrier();
         for (var j = l; j < na; j += SG) {
             let rank = sh_cr[j];
-            if (rank > SERIAL) {
-                for (var t = 0u; t < 3u; t++) {
-                    let key = sh_ref[3u * j + t];
+            if (rank > PARTNER) {
+                let code = pair_code(j);
+                for (var t = 0u; t < 6u; t++) {
+                    let key = unit_key(j, t, code);
                     if (key != NONE) {
                         atomicMax(&sh_key[NODE_CAP + key], rank);
                     }
@@ -268,13 +425,14 @@ fn compact_local(l: u32, na: u32) -> bool {
         var left = 0.0;
         for (var j = l; j < na; j += SG) {
             let rank = sh_cr[j];
-            if (rank <= SERIAL) {
+            if (rank <= PARTNER) {
                 continue;
             }
+            let code = pair_code(j);
             var first = true;
             var used = 0u;
-            for (var t = 0u; t < 3u; t++) {
-                let key = sh_ref[3u * j + t];
+            for (var t = 0u; t < 6u; t++) {
+                let key = unit_key(j, t, code);
                 if (key != NONE) {
                     first = first && atomicLoad(&sh_key[NODE_CAP + key]) == rank;
                     used |= atomicLoad(&sh_key[key]);
@@ -284,7 +442,7 @@ fn compact_local(l: u32, na: u32) -> bool {
                 left = 1.0;
                 continue;
             }
-            colour_local(j, used);
+            colour_local(j, used, code);
         }
         if (!any_positive(l, left)) {
             break;
@@ -320,20 +478,27 @@ fn compact_global(l: u32, na: u32) {
         var left = 0.0;
         for (var j = l; j < na; j += SG) {
             let k = ws[cc.p.o_color + j];
-            if (ws[cc.p.o_list + k] != 1u) {
+            let code = pair_code(j);
+            if (ws[cc.p.o_list + k] != 1u || (code & PAIR_PARTNER) != 0u) {
                 continue;
             }
+            // The unit: the constraint and a leader's partner, whose nodes it colours too.
+            let kp = select(NONE, paired_slot(code), (code & PAIR_LEADER) != 0u);
             var ready = true;
             var used = 0u;
-            for (var t = 0u; t < 3u && ready; t++) {
-                let i = ref_node(k, t);
+            for (var t = 0u; t < 6u && ready; t++) {
+                let u = select(kp, k, t < 3u);
+                if (u == NONE) {
+                    break;
+                }
+                let i = ref_node(u, t % 3u);
                 if (i == NONE) {
                     continue;
                 }
                 let end = ws[cc.p.o_noff + i + 1u];
                 for (var q = ws[cc.p.o_noff + i]; q < end; q++) {
                     let k2 = grow[b + q];
-                    if (k2 == k) {
+                    if (k2 == k || k2 == kp) {
                         continue;
                     }
                     let s2 = ws[cc.p.o_list + k2];
@@ -341,7 +506,10 @@ fn compact_global(l: u32, na: u32) {
                         continue;
                     }
                     if (s2 == 1u) {
-                        if (coloured_before(k2, k)) {
+                        // (An uncoloured partner waits on its leader's order.)
+                        let c2 = ws[cc.p.o_pair + k2];
+                        let lead = select(k2, paired_slot(c2), (c2 & PAIR_PARTNER) != 0u);
+                        if (coloured_before(lead, k)) {
                             ready = false;
                             break;
                         }
@@ -351,7 +519,11 @@ fn compact_global(l: u32, na: u32) {
                 }
             }
             if (ready) {
-                ws[cc.p.o_list + k] = 2u + first_free(used);
+                let col = 2u + first_free(used);
+                ws[cc.p.o_list + k] = col;
+                if (kp != NONE) {
+                    ws[cc.p.o_list + kp] = col;
+                }
             } else {
                 left = 1.0;
             }
@@ -412,13 +584,29 @@ fn compact_global_serial(l: u32, na: u32) {
         sh_nn = 0u;
         for (var j = 0u; j < na; j++) {
             let k = ws[cc.p.o_color + j];
-            let c = cons[k];
-            let s = slots[k].s;
-            let col = first_free(mask_of(s) | mask_of(c.a) | mask_of(c.b));
-            mark_node(s, col);
-            mark_node(c.a, col);
-            mark_node(c.b, col);
+            let code = pair_code(j);
+            if ((code & PAIR_PARTNER) != 0u) {
+                continue;
+            }
+            let kp = select(NONE, paired_slot(code), (code & PAIR_LEADER) != 0u);
+            var used = 0u;
+            for (var t = 0u; t < 6u; t++) {
+                let u = select(kp, k, t < 3u);
+                if (u != NONE) {
+                    used |= mask_of(ref_node(u, t % 3u));
+                }
+            }
+            let col = first_free(used);
+            for (var t = 0u; t < 6u; t++) {
+                let u = select(kp, k, t < 3u);
+                if (u != NONE) {
+                    mark_node(ref_node(u, t % 3u), col);
+                }
+            }
             ws[cc.p.o_list + k] = 2u + col;
+            if (kp != NONE) {
+                ws[cc.p.o_list + kp] = 2u + col;
+            }
         }
     }
     storageBarrier();
@@ -454,6 +642,9 @@ fn first_reference(r: u32) -> bool {
 
 // Constraint j's colour after `compact_local` (local) or `compact_global`.
 fn colour_of(j: u32, local: bool) -> u32 {
+    if ((pair_code(j) & PAIR_PARTNER) != 0u) {
+        return PARTNER;
+    }
     if (local) {
         return sh_cr[j];
     }
@@ -482,7 +673,7 @@ fn scatter_by_colour(l: u32, na: u32, local: bool) {
     }
     let colours = workgroupUniformLoad(&sh_w);
     var base = 0u;
-    for (var c = 0u; c <= SERIAL; c++) {
+    for (var c = 0u; c <= PARTNER; c++) {
         if (l == 0u) {
             sh_off[c] = base;
         }
@@ -505,10 +696,10 @@ fn scatter_by_colour(l: u32, na: u32, local: bool) {
         base += workgroupUniformLoad(&sh_total);
     }
     if (l == 0u) {
-        sh_off[SERIAL + 1u] = base;
+        sh_off[PARTNER + 1u] = base;
         // The offsets kept in the per-colour path's list offsets, unused on this path, for the
         // test hook `GpuSolver::contact_last_colouring`.
-        for (var c = 0u; c <= SERIAL + 1u; c++) {
+        for (var c = 0u; c <= PARTNER + 1u; c++) {
             ws[cc.p.o_loff + c] = sh_off[c];
         }
     }

@@ -103,12 +103,16 @@ struct ContactParams {
     o_dvp: u32,
     extrapolate: u32,     // 1: extrapolate (one-workgroup path); 0: plain sweeps
     // The one-workgroup solve's packed rows (contact_solve.wgsl `pack`): per compacted constraint
-    // its nodes' packed indices (ws, 3 words), its row (fws, 2 vec4) and friction row (fws, 1
-    // vec4, with friction); the packed nodes (fws, n_local + 1 vec4).
+    // its nodes' packed indices and its partner's packed index or NONE (ws, 4 words), its row
+    // (fws, 2 vec4) and friction row (fws, 1 vec4, with friction); the packed nodes (fws,
+    // n_local + 1 vec4).
     o_cidx: u32,
     f_row: u32,
     f_frow: u32,
     f_node: u32,
+    pairs: u32,           // 1: node pairs met from both passes solved as 2 x 2 blocks
+    o_best: u32,          // per slot: its best partner (contact_colour.wgsl `pair_constraints`)
+    o_pair: u32,          // per slot: its pair code (PAIR_LEADER / PAIR_PARTNER | the other's index)
 }
 
 // Indirect entry of the kernels over the active slots (src/gpu/contact/mod.rs ACTIVE_ENTRY).

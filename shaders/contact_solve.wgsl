@@ -8,7 +8,10 @@
 // contact_colour.wgsl (the one-workgroup path's compaction and colouring, `compact`).
 //
 // Two paths, chosen by size on the host: `solve_one`, every sweep in one workgroup (colours
-// separated by barriers; the fastest for small contact sets), and `sweep_color` + `recheck`, one
+// separated by barriers; the fastest for small contact sets; with cc.p.pairs, an option not
+// taken by default, the two constraints of a node pair met from both passes swept together as a
+// 2 x 2 block, `block_packed`, as the CPU reference does: the striker's sweeps a step 2.5 x
+// fewer, but f32 fails the contact patch test's 8/6 mesh with them), and `sweep_color` + `recheck`, one
 // dispatch per colour and sweep over as many workgroups as the colour needs. With many active
 // slots (cc.p.split) the one-workgroup path leaves its re-checks to `recheck_active`, one thread
 // per active slot over many workgroups, dispatched between its rounds: the same constraints and
@@ -19,7 +22,7 @@ const ACTIVE_SET_ROUNDS: u32 = 4u;    // crate::contact::ACTIVE_SET_ROUNDS
 var<workgroup> sh_m: array<f32, SG>;
 var<workgroup> sh_w: u32;
 var<workgroup> sh_nc: u32;
-var<workgroup> sh_off: array<u32, 34>;   // colour offsets of the compacted slots (SERIAL + 2)
+var<workgroup> sh_off: array<u32, 35>;   // colour offsets of the compacted slots (PARTNER + 2)
 var<workgroup> sh_max: atomic<u32>;
 var<workgroup> sh_split: u32;
 var<workgroup> sh_nn: u32;         // nodes of the compacted constraints (ws[o_nlist..])
@@ -65,8 +68,9 @@ fn packed_index(i: u32, dummy: u32) -> u32 {
 // (on lavapipe a sweep's update had cost about 280 ns, most of it in loads of Cons, Slot, c_ref
 // and c_pv): each node of theirs (ws[o_nlist..], sh_nn) a record (dv, 1/m) at fws[f_node + j],
 // and in place of its colour mask its packed index j; the record after the last stays zero and
-// stands for a wall's missing segment. Each constraint q its nodes' packed indices
-// (ws[o_cidx + 3q..]), its row (n, g0, w), (lambda, lt, xi, mu) at fws[f_row + 2q..] and, with
+// stands for a wall's missing segment. Each constraint q its nodes' packed indices and a
+// leader's partner's packed index, NONE for others (ws[o_cidx + 4q..]; the slots' packed
+// indices through ws[o_best..], free after the pairing), its row (n, g0, w), (lambda, lt, xi, mu) at fws[f_row + 2q..] and, with
 // friction, (wt, the free update's relative tangential velocity) at fws[f_frow + q]. `unpack`
 // writes dv and the multipliers back.
 fn pack(l: u32) {
@@ -79,16 +83,21 @@ fn pack(l: u32) {
     if (l == 0u) {
         fws[cc.p.f_node + nn] = vec4<f32>(0.0);
     }
+    let na = sh_off[PARTNER + 1u];
+    for (var q = l; q < na; q += SG) {
+        ws[cc.p.o_best + ws[cc.p.o_act + q]] = q;
+    }
     storageBarrier();
-    let na = sh_off[SERIAL + 1u];
     for (var q = l; q < na; q += SG) {
         let k = ws[cc.p.o_act + q];
         let c = cons[k];
         let s = slots[k].s;
-        let at = cc.p.o_cidx + 3u * q;
+        let at = cc.p.o_cidx + 4u * q;
         ws[at] = ws[cc.p.o_mask + s];
         ws[at + 1u] = packed_index(c.a, nn);
         ws[at + 2u] = packed_index(c.b, nn);
+        let code = ws[cc.p.o_pair + k];
+        ws[at + 3u] = select(NONE, ws[cc.p.o_best + paired_slot(code)], (code & PAIR_LEADER) != 0u);
         fws[cc.p.f_row + 2u * q] = vec4<f32>(c.n, c.g0, c.w);
         fws[cc.p.f_row + 2u * q + 1u] = vec4<f32>(c.lambda, c.lt, c.xi, c.mu);
         if (FRICTION && c.mu > 0.0) {
@@ -106,7 +115,7 @@ fn unpack(l: u32) {
         c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, fws[cc.p.f_node + j].xy);
         ws[cc.p.o_mask + i] = 0u;
     }
-    let na = sh_off[SERIAL + 1u];
+    let na = sh_off[PARTNER + 1u];
     for (var q = l; q < na; q += SG) {
         let k = ws[cc.p.o_act + q];
         let r = fws[cc.p.f_row + 2u * q + 1u];
@@ -120,7 +129,7 @@ fn unpack(l: u32) {
 fn pgs_packed(q: u32, dt: f32, inv_scale: f32, dummy: u32) -> f32 {
     let r0 = fws[cc.p.f_row + 2u * q];
     var r1 = fws[cc.p.f_row + 2u * q + 1u];
-    let at = cc.p.o_cidx + 3u * q;
+    let at = cc.p.o_cidx + 4u * q;
     let s = cc.p.f_node + ws[at];
     let a = cc.p.f_node + ws[at + 1u];
     let b = cc.p.f_node + ws[at + 2u];
@@ -173,6 +182,124 @@ fn pgs_packed(q: u32, dt: f32, inv_scale: f32, dummy: u32) -> f32 {
     return change;
 }
 
+// The fws indices of packed constraint q's node records (slave, segment ends).
+fn packed_nodes(q: u32) -> vec3<u32> {
+    let at = cc.p.o_cidx + 4u * q;
+    return vec3<u32>(ws[at], ws[at + 1u], ws[at + 2u]) + vec3<u32>(cc.p.f_node);
+}
+
+// The relative normal velocity change of packed constraint q (nodes `i`, normal n, xi) from
+// the packed nodes' dv, as pgs_packed sums it.
+fn packed_relative(i: vec3<u32>, n: vec2<f32>, xi: f32) -> f32 {
+    var rel = dot(fws[i.x].xy, n);
+    rel -= (1.0 - xi) * dot(fws[i.y].xy, n) + xi * dot(fws[i.z].xy, n);
+    return rel;
+}
+
+// Impulse d along n on packed constraint q's nodes (as pgs_packed applies it).
+fn packed_impulse(i: vec3<u32>, n: vec2<f32>, xi: f32, d: f32, inv_scale: f32) {
+    let ns = fws[i.x];
+    fws[i.x] = vec4<f32>(ns.xy + d * inv_scale * n * ns.zw, ns.zw);
+    let na = fws[i.y];
+    fws[i.y] = vec4<f32>(na.xy + -(1.0 - xi) * d * inv_scale * n * na.zw, na.zw);
+    let nb = fws[i.z];
+    fws[i.z] = vec4<f32>(nb.xy + -xi * d * inv_scale * n * nb.zw, nb.zw);
+}
+
+fn packed_share(t: u32, xi: f32) -> f32 {
+    if (t == 0u) {
+        return 1.0;
+    }
+    if (t == 1u) {
+        return -(1.0 - xi);
+    }
+    return -xi;
+}
+
+// Smallest determinant of a 2 x 2 block, relative to the product of its diagonal, that is solved
+// as a block (f32; the CPU reference's 1e-12 is below f32's resolution). Below it the two rows
+// are swept one after the other.
+const BLOCK_DET: f32 = 1e-3;
+
+// ContactSet::block on packed constraint q and its partner p: the 2 x 2 linear complementarity
+// problem of their multipliers solved exactly (both pushing, either alone, or neither, the first
+// that holds); returns the larger change of their gaps. The same arithmetic in f32.
+fn block_packed(q: u32, p: u32, dt: f32, inv_scale: f32) -> f32 {
+    let r0k = fws[cc.p.f_row + 2u * q];
+    var r1k = fws[cc.p.f_row + 2u * q + 1u];
+    let r0j = fws[cc.p.f_row + 2u * p];
+    var r1j = fws[cc.p.f_row + 2u * p + 1u];
+    let ik = packed_nodes(q);
+    let ij = packed_nodes(p);
+    let nk = r0k.xy;
+    let nj = r0j.xy;
+    let xk = r1k.z;
+    let xj = r1j.z;
+    // The coupling: the change of one gap per unit impulse of the other (ContactSet::coupling).
+    var wc = 0.0;
+    for (var t = 0u; t < 3u; t++) {
+        for (var u = 0u; u < 3u; u++) {
+            if (ik[t] == ij[u]) {
+                let im = fws[ik[t]].zw;
+                wc += packed_share(t, xk) * packed_share(u, xj) * (nk.x * nj.x * im.x + nk.y * nj.y * im.y);
+            }
+        }
+    }
+    let wkj = dt * wc * inv_scale;
+    let wk = r0k.w;
+    let wj = r0j.w;
+    let lk = r1k.x;
+    let lj = r1j.x;
+    let gk = r0k.z + dt * packed_relative(ik, nk, xk);
+    let gj = r0j.z + dt * packed_relative(ij, nj, xj);
+    // The gaps without either impulse: q + W mu is the gap at the multipliers mu.
+    let qk = gk - wk * lk - wkj * lj;
+    let qj = gj - wkj * lk - wj * lj;
+    let det = wk * wj - wkj * wkj;
+    var mu = vec2<f32>(0.0);
+    var both = false;
+    if (det > BLOCK_DET * wk * wj) {
+        let m = vec2<f32>((-qk * wj + qj * wkj) / det, (-qj * wk + qk * wkj) / det);
+        if (m.x > 0.0 && m.y > 0.0) {
+            mu = m;
+            both = true;
+        }
+    }
+    if (!both) {
+        if (qk < 0.0 && qj - wkj * qk / wk >= 0.0) {
+            mu.x = -qk / wk;
+        } else if (qj < 0.0 && qk - wkj * qj / wj >= 0.0) {
+            mu.y = -qj / wj;
+        } else if (qk < 0.0 || qj < 0.0) {
+            // (Round-off, or a block below BLOCK_DET: the two updates one after the other.)
+            mu.x = max(lk - gk / wk, 0.0);
+            mu.y = max(lj - (gj + wkj * (mu.x - lk)) / wj, 0.0);
+        }
+    }
+    let dk = mu.x - lk;
+    let dj = mu.y - lj;
+    if (dk != 0.0) {
+        packed_impulse(ik, nk, xk, dk, inv_scale);
+        r1k.x = mu.x;
+        fws[cc.p.f_row + 2u * q + 1u] = r1k;
+    }
+    if (dj != 0.0) {
+        packed_impulse(ij, nj, xj, dj, inv_scale);
+        r1j.x = mu.y;
+        fws[cc.p.f_row + 2u * p + 1u] = r1j;
+    }
+    return max(abs(wk * dk + wkj * dj), abs(wkj * dk + wj * dj));
+}
+
+// Sweeps packed constraint q: with its partner as a 2 x 2 block when it leads a pair.
+fn sweep_packed(q: u32, dt: f32, inv_scale: f32, dummy: u32) -> f32 {
+    let p = ws[cc.p.o_cidx + 4u * q + 3u];
+    if (p != NONE) {
+        return block_packed(q, p, dt, inv_scale);
+    }
+    return pgs_packed(q, dt, inv_scale, dummy);
+}
+
 // The factor before the k-th sweep since the sweeps (re)started (crate::contact::extrapolation):
 // 0 for the first two, then EXTRAPOLATION.
 const EXTRAPOLATION: f32 = 0.9;       // crate::contact::EXTRAPOLATION
@@ -188,7 +315,7 @@ fn extrapolation(k: u32) -> f32 {
 // impulse: dv is linear in the multipliers, and a negative multiplier is projected by its own
 // update in the sweep); the values reached are kept for the next call. beta = 0 only keeps them.
 fn extrapolate(l: u32, beta: f32) {
-    let na = sh_off[SERIAL + 1u];
+    let na = sh_off[PARTNER + 1u];
     for (var q = l; q < na; q += SG) {
         let row = cc.p.f_row + 2u * q + 1u;
         let r = fws[row];
@@ -256,13 +383,13 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
         for (var col = 0u; col < nc; col++) {
             let end = sh_off[col + 1u];
             for (var q = sh_off[col] + l; q < end; q += SG) {
-                change = max(change, pgs_packed(q, dt, inv_scale, dummy));
+                change = max(change, sweep_packed(q, dt, inv_scale, dummy));
             }
             storageBarrier();
         }
         if (l == 0u) {
             for (var q = sh_off[SERIAL]; q < sh_off[SERIAL + 1u]; q++) {
-                change = max(change, pgs_packed(q, dt, inv_scale, dummy));
+                change = max(change, sweep_packed(q, dt, inv_scale, dummy));
             }
         }
         taken += 1u;

@@ -37,6 +37,9 @@ pub struct ContactTiming {
     /// Plain projected Gauss-Seidel sweeps instead of the extrapolated ones, on both backends
     /// ([`crate::contact::extrapolation`]): a comparison.
     pub plain_sweeps: bool,
+    /// The GPU's one-workgroup solve with 2 x 2 blocks of node pairs
+    /// ([`crate::gpu::contact::ContactOptions::pair_blocks`]): a comparison.
+    pub pair_blocks: bool,
     /// How the GPU's one-workgroup solve colours its constraints (`None`: the adapter's default,
     /// [`crate::gpu::contact::parallel_colouring`]): a comparison.
     pub parallel_colouring: Option<bool>,
@@ -180,6 +183,7 @@ fn contact_rows(
             rounds,
             warmup,
             plain_sweeps: timing.plain_sweeps,
+            pair_blocks: timing.pair_blocks,
             wall_seconds: wall,
             steps_per_second: total as f64 / wall,
             free_seconds: t[1].iter().sum(),
@@ -292,6 +296,7 @@ fn gpu_solvers(
     let pile = timing.pile;
     let options = crate::gpu::contact::ContactOptions {
         plain_sweeps: timing.plain_sweeps,
+        pair_blocks: timing.pair_blocks,
         parallel_colouring: timing.parallel_colouring,
         search_one: timing.search_one,
         group: timing.group,
@@ -410,6 +415,7 @@ mod tests {
             friction,
             failure: None,
             plain_sweeps: false,
+            pair_blocks: false,
             parallel_colouring: None,
             search_one: None,
             group: None,

@@ -153,6 +153,12 @@ pub struct BenchArgs {
     /// extrapolated ones (both backends): a comparison.
     #[arg(long)]
     pub plain_sweeps: bool,
+    /// Time the GPU's one-workgroup contact solve with 2 x 2 blocks (the two constraints of a
+    /// node pair met from both passes solved together, as on the CPU reference;
+    /// `ContactOptions::pair_blocks`, not the default): a comparison, for the tables and
+    /// --profile.
+    #[arg(long)]
+    pub pair_blocks: bool,
     /// How the GPU's one-workgroup contact solve colours its constraints (default: in parallel
     /// rounds on GPUs, in slot order on CPU adapters; `ricochet::gpu::contact::parallel_colouring`):
     /// a comparison, for the tables and --profile.

@@ -56,6 +56,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         rounds,
         warmup,
         plain_sweeps,
+        pair_blocks,
         colouring,
         no_record_ahead,
         search,
@@ -126,7 +127,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
             &ctx,
             &scenes,
             (warmup, steps),
-            (parallel_colouring, search_one, contact_group),
+            (parallel_colouring, search_one, contact_group, pair_blocks),
             json.as_deref(),
         );
     }
@@ -158,6 +159,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         friction,
         failure,
         plain_sweeps,
+        pair_blocks,
         parallel_colouring,
         search_one,
         group: contact_group,
@@ -331,10 +333,16 @@ fn profile(
     ctx: &Arc<GpuContext>,
     scenes: &[(ProfileScene, Vec<usize>)],
     (warmup, steps): (u64, u64),
-    (parallel_colouring, search_one, group): (Option<bool>, Option<bool>, Option<u32>),
+    (parallel_colouring, search_one, group, pair_blocks): (
+        Option<bool>,
+        Option<bool>,
+        Option<u32>,
+        bool,
+    ),
     json: Option<&Path>,
 ) -> anyhow::Result<ExitCode> {
     let options = ricochet::gpu::contact::ContactOptions {
+        pair_blocks,
         parallel_colouring,
         search_one,
         group,

@@ -321,7 +321,9 @@ impl ContactSet {
     }
 
     /// Pairs the constraints solved together as 2 x 2 blocks (see [`ContactSet::block`]) into
-    /// `partner`. Candidates: two frictionless Lagrange constraints against segments of the same
+    /// `partner`. (The GPU's one-workgroup solve pairs the same candidates by mutual best score
+    /// instead of greedily, `pair_constraints` in `shaders/contact_colour.wgsl`: a rule that
+    /// threads apply in any order.) Candidates: two frictionless Lagrange constraints against segments of the same
     /// interface, each one's slave node a node of the other's segment (the same contact met from
     /// both passes: a node and the nearby node of the other body, each the other's master).
     /// A node at a corner can have several; the most nearly parallel pairs (the largest

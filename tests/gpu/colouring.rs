@@ -5,7 +5,7 @@
 
 use super::*;
 
-use ricochet::gpu::contact::colouring::{colours, SERIAL};
+use ricochet::gpu::contact::colouring::{colours_paired, PARTNER, SERIAL};
 use ricochet::gpu::contact::ContactOptions;
 
 /// What [`check_last`] saw over a run.
@@ -17,11 +17,15 @@ struct Seen {
     /// Compactions of at most `bound` constraints on more than 1.5 `bound` nodes: those that the
     /// compaction in workgroup memory gives up to the one through storage.
     beyond_nodes: usize,
+    /// Pairs solved as 2 x 2 blocks.
+    pairs: usize,
 }
 
 /// The last compaction of `gpu`: its constraints grouped by the colours the reference gives (the
-/// greedy colouring in the hashed order of their slots when `parallel`, else in slot order), in
-/// slot order within a colour, no two of a colour sharing a node.
+/// greedy colouring in the hashed order of their slots when `parallel`, else in slot order, each
+/// pair's leader on the nodes of both, its partner listed last), in slot order within a colour,
+/// no two of a colour sharing a node (a leader's with its partner's). Each pair: the leader the
+/// lower slot, each one's slave an end of the other's segment, each slot in one pair at most.
 fn check_last(
     gpu: &mut GpuSolver,
     parallel: bool,
@@ -32,19 +36,61 @@ fn check_last(
     let last = gpu.contact_last_colouring().expect("colouring");
     let n = last.constraints.len();
     let o = &last.offsets;
-    assert_eq!(o.len(), SERIAL as usize + 2);
+    assert_eq!(o.len(), PARTNER as usize + 2);
     assert!(o.windows(2).all(|w| w[0] <= w[1]), "{what}: offsets {o:?}");
-    assert_eq!(o[SERIAL as usize + 1] as usize, n);
-    let expected = colours(&last.constraints, parallel);
+    assert_eq!(o[PARTNER as usize + 1] as usize, n);
+    let nodes_of = |k: u32| {
+        last.constraints
+            .iter()
+            .find(|c| c.0 == k)
+            .map(|c| c.1)
+            .expect("a paired slot is compacted")
+    };
+    let mut in_pair = std::collections::HashSet::new();
+    for &(a, b) in &last.pairs {
+        assert!(a < b, "{what}: pair ({a}, {b}) led by the higher slot");
+        assert!(
+            in_pair.insert(a) && in_pair.insert(b),
+            "{what}: slot in two pairs"
+        );
+        let (na, nb) = (nodes_of(a), nodes_of(b));
+        assert!(
+            nb[1..].contains(&na[0]) && na[1..].contains(&nb[0]),
+            "{what}: pair ({a}, {b}) is not a node pair met from both passes: {na:?} {nb:?}"
+        );
+    }
+    let partners: std::collections::HashSet<u32> = last.pairs.iter().map(|p| p.1).collect();
+    let partner_range = &last.constraints[o[PARTNER as usize] as usize..n];
+    assert_eq!(
+        partner_range.len(),
+        partners.len(),
+        "{what}: partners listed"
+    );
+    assert!(partner_range.iter().all(|c| partners.contains(&c.0)));
+    let expected = colours_paired(&last.constraints, &last.pairs, parallel);
     for c in 0..=SERIAL as usize {
         let group = &last.constraints[o[c] as usize..o[c + 1] as usize];
         assert!(
             group.windows(2).all(|w| w[0].0 < w[1].0),
             "{what}: colour {c} not in slot order"
         );
+        // Each unit's distinct nodes (a leader's with its partner's, which share two).
         let mut nodes: Vec<u32> = group
             .iter()
-            .flat_map(|g| g.1)
+            .flat_map(|g| {
+                let partner = last
+                    .pairs
+                    .iter()
+                    .find(|p| p.0 == g.0)
+                    .map(|p| nodes_of(p.1));
+                let mut unit: Vec<u32> =
+                    g.1.into_iter()
+                        .chain(partner.unwrap_or([u32::MAX; 3]))
+                        .collect();
+                unit.sort_unstable();
+                unit.dedup();
+                unit
+            })
             .filter(|&x| x != u32::MAX)
             .collect();
         let all = nodes.len();
@@ -77,6 +123,7 @@ fn check_last(
     }
     seen.checked += n;
     seen.largest = seen.largest.max(n);
+    seen.pairs += last.pairs.len();
 }
 
 fn solver(ctx: &Arc<GpuContext>, text: &str, options: ContactOptions) -> GpuSolver {
@@ -85,10 +132,11 @@ fn solver(ctx: &Arc<GpuContext>, text: &str, options: ContactOptions) -> GpuSolv
         .expect("gpu solver")
 }
 
-/// The striker into its plate (two-pass Lagrange constraints on two meshes, hundreds a step),
-/// with either colouring, its compaction in workgroup memory at the device's bound and at 8
-/// constraints (so that its larger steps go through storage), through storage alone, and with
-/// the one-workgroup kernels at 64 threads: every 10 steps, [`check_last`].
+/// The striker into its plate (two-pass Lagrange constraints on two meshes, hundreds a step,
+/// most of them in node pairs met from both passes), with either colouring, its compaction in
+/// workgroup memory at the device's bound and at 8 constraints (so that its larger steps go
+/// through storage), through storage alone, with the one-workgroup kernels at 64 threads, and
+/// without the 2 x 2 blocks (the default: no pair): every 10 steps, [`check_last`].
 #[test]
 fn gpu_colouring_of_the_one_workgroup_solve_is_its_cpu_reference() {
     let Some(ctx) = context() else { return };
@@ -97,22 +145,28 @@ fn gpu_colouring_of_the_one_workgroup_solve_is_its_cpu_reference() {
     // (The adapter's workgroup, and 64 threads: on lavapipe a workgroup of 8 runs in lock step,
     // which hides a missing barrier.)
     let sizes = [
-        (None, None),
-        (Some(8), None),
-        (Some(0), None),
-        (None, Some(64)),
+        (None, None, true),
+        (Some(8), None, true),
+        (Some(0), None, true),
+        (None, Some(64), true),
+        (None, None, false),
     ];
-    for (parallel, (local, group)) in sizes.into_iter().flat_map(|s| [(true, s), (false, s)]) {
+    for (parallel, (local, group, pair_blocks)) in
+        sizes.into_iter().flat_map(|s| [(true, s), (false, s)])
+    {
         let options = ContactOptions {
             multi: Some(false),
             compact_local: local,
             group,
             parallel_colouring: Some(parallel),
+            pair_blocks,
             ..ContactOptions::default()
         };
         let mut gpu = solver(&ctx, &text, options);
-        let what =
-            format!("parallel {parallel}, workgroup memory up to {local:?}, group {group:?}");
+        let what = format!(
+            "parallel {parallel}, workgroup memory up to {local:?}, group {group:?}, 2 x 2 \
+             blocks {pair_blocks}"
+        );
         let mut seen = Seen::default();
         for _ in 0..12 {
             if gpu.run_steps(10).expect("steps") == 0 {
@@ -121,9 +175,17 @@ fn gpu_colouring_of_the_one_workgroup_solve_is_its_cpu_reference() {
             check_last(&mut gpu, parallel, local, &what, &mut seen);
         }
         println!(
-            "{what}: {} constraints checked, at most {} in a compaction, {} colours",
-            seen.checked, seen.largest, seen.colours
+            "{what}: {} constraints checked, at most {} in a compaction, {} colours, {} pairs",
+            seen.checked, seen.largest, seen.colours, seen.pairs
         );
+        if pair_blocks {
+            assert!(
+                4 * seen.pairs > seen.checked,
+                "{what}: most constraints paired"
+            );
+        } else {
+            assert_eq!(seen.pairs, 0, "{what}: no pair without the blocks");
+        }
         assert!(
             seen.largest > 8,
             "{what}: the striker's compactions reach more than 8"

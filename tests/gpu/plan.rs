@@ -254,6 +254,7 @@ fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
         friction: Some(0.3),
         failure: Some(ricochet::bench::FAILURE_STRAIN),
         plain_sweeps: false,
+        pair_blocks: false,
         // (The GPUs' colouring, which lavapipe does not take by default.)
         parallel_colouring: Some(true),
         search_one: None,

@@ -13,6 +13,14 @@ pub const SOURCE: &str = include_str!("../../../shaders/contact_colour.wgsl");
 
 /// The serial colour (WGSL `SERIAL`): a constraint that finds colours 0 to 31 taken.
 pub const SERIAL: u32 = 32;
+/// Where the partners of the 2 x 2 blocks are listed (WGSL `PARTNER`): after the serial colour,
+/// each swept with its leader, never on its own.
+pub const PARTNER: u32 = SERIAL + 1;
+/// Pair code of a leader (WGSL `PAIR_LEADER`, per slot in the workspace): its partner's index
+/// in the compacted list in the low bits ([`PAIR_INDEX`]).
+pub const PAIR_LEADER: u32 = 0x8000_0000;
+/// The low bits of a pair code: the other constraint's index in the compacted list.
+pub const PAIR_INDEX: u32 = 0x3fff_ffff;
 
 /// The hashed priority of slot `k` (WGSL `priority`, `shaders/contact_common.wgsl`: PCG's output
 /// permutation), the order of the search's and the solve's colourings.
@@ -35,7 +43,27 @@ pub fn coloured_before(a: u32, b: u32) -> bool {
 /// neighbours coloured before it holds, [`SERIAL`] when colours 0 to 31 are all taken (a serial
 /// constraint marks its nodes with colour 31).
 pub fn colours(constraints: &[(u32, [u32; 3])], hashed: bool) -> Vec<u32> {
-    let mut order: Vec<usize> = (0..constraints.len()).collect();
+    colours_paired(constraints, &[], hashed)
+}
+
+/// [`colours`] with the 2 x 2 blocks `pairs` (leader's slot, partner's slot): a leader is
+/// coloured as one constraint on the nodes of both, in its own place in the order, and its
+/// partner takes [`PARTNER`].
+pub fn colours_paired(
+    constraints: &[(u32, [u32; 3])],
+    pairs: &[(u32, u32)],
+    hashed: bool,
+) -> Vec<u32> {
+    let index: HashMap<u32, usize> = constraints
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (c.0, i))
+        .collect();
+    let partner: HashMap<u32, u32> = pairs.iter().copied().collect();
+    let partners: std::collections::HashSet<u32> = pairs.iter().map(|p| p.1).collect();
+    let mut order: Vec<usize> = (0..constraints.len())
+        .filter(|&i| !partners.contains(&constraints[i].0))
+        .collect();
     order.sort_by(|&i, &j| {
         let (a, b) = (constraints[i].0, constraints[j].0);
         if a == b {
@@ -47,9 +75,13 @@ pub fn colours(constraints: &[(u32, [u32; 3])], hashed: bool) -> Vec<u32> {
         }
     });
     let mut masks: HashMap<u32, u32> = HashMap::new();
-    let mut colour = vec![0; constraints.len()];
+    let mut colour = vec![PARTNER; constraints.len()];
     for i in order {
-        let nodes = constraints[i].1.iter().filter(|&&n| n != u32::MAX);
+        let mut unit = constraints[i].1.to_vec();
+        if let Some(j) = partner.get(&constraints[i].0).and_then(|p| index.get(p)) {
+            unit.extend_from_slice(&constraints[*j].1);
+        }
+        let nodes = unit.iter().filter(|&&n| n != u32::MAX);
         let used = nodes
             .clone()
             .fold(0u32, |m, n| m | masks.get(n).copied().unwrap_or(0));

@@ -179,13 +179,21 @@ pub struct ContactParams {
     /// the per-colour path never does).
     pub extrapolate: u32,
     /// The one-workgroup solve's packed rows (`contact_solve.wgsl`, `pack`): ws offset of the
-    /// compacted constraints' node indices into the packed nodes (3 words each), fws offsets of
+    /// compacted constraints' node indices into the packed nodes and their partner's packed
+    /// index (4 words each), fws offsets of
     /// their rows (2 vec4 each), of their friction rows (1 vec4 each, with friction) and of the
     /// packed nodes (`n_local` + 1 vec4: dv and 1/m, the last one zero for walls).
     pub o_cidx: u32,
     pub f_row: u32,
     pub f_frow: u32,
     pub f_node: u32,
+    /// 1: the one-workgroup solve pairs the two constraints of a node pair met from both passes
+    /// and solves them as a 2 x 2 block (`contact_colour.wgsl`, `pair_constraints`).
+    pub pairs: u32,
+    /// ws offsets of the pairing (`pair_constraints`), a word per slot each: each constraint's
+    /// best partner, then its pair code (leader or partner, and the other's compacted index).
+    pub o_best: u32,
+    pub o_pair: u32,
 }
 
 /// Mirror of the first part of WGSL `ContactCtl` after the parameters: the counters the host
@@ -223,7 +231,7 @@ pub const PARAMS_SIZE: u64 = std::mem::size_of::<ContactParams>() as u64;
 pub const CTL_SIZE: u64 =
     PARAMS_SIZE + std::mem::size_of::<ContactCounters>() as u64 + 4 * MAX_SWEEP_SLOTS as u64 + 16;
 
-const _: () = assert!(std::mem::size_of::<ContactParams>() == 208);
+const _: () = assert!(std::mem::size_of::<ContactParams>() == 220);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 72);
 
 /// What the stages record their dispatches with: the contact bind group (group 0; its dynamic
@@ -319,7 +327,9 @@ fn layout_workspace(p: &mut ContactParams) -> Workspace {
     p.o_dvp = take(2 * nl);
     // The one-workgroup solve's packed rows (none on the per-colour path).
     let one = p.multi == 0;
-    p.o_cidx = if one { take(3 * ns) } else { 0 };
+    p.o_cidx = if one { take(4 * ns) } else { 0 };
+    p.o_best = if one { take(ns) } else { 0 };
+    p.o_pair = if one { take(ns) } else { 0 };
     let words = at;
     let mut f = 0u32;
     let mut ftake = |n: u32| {
@@ -445,6 +455,7 @@ impl ContactState {
             multi,
             split,
             extrapolate,
+            pairs,
             one,
             search_one,
             search_switch,
@@ -512,6 +523,7 @@ impl ContactState {
             friction: u32::from(friction),
             split: u32::from(split && !multi),
             extrapolate: u32::from(extrapolate && !multi),
+            pairs: u32::from(pairs && !multi),
             ..Default::default()
         };
         let work = layout_workspace(&mut params);

@@ -31,6 +31,15 @@ pub struct ContactOptions {
     /// Plain projected Gauss-Seidel sweeps on the one-workgroup path (`true`) instead of the
     /// extrapolated ones (the default, as on the CPU reference); for comparisons.
     pub plain_sweeps: bool,
+    /// 2 x 2 blocks in the one-workgroup solve (`true`): the two constraints of a node pair met
+    /// from both passes solved together, as on the CPU reference (`contact_colour.wgsl`
+    /// `pair_constraints`, `contact_solve.wgsl` `block_packed`), instead of each on its own (the
+    /// default). Not the default: the bench striker's sweeps a step go 15.4 -> 6.1 (10^4
+    /// elements, lavapipe, 2026-11-28), but the pairs that win are nearly redundant (1 - cos^2 of
+    /// their rows below 1e-4), their 2 x 2 solve is at the limit of f32, and the contact patch
+    /// test's 8/6 mesh (`tests/gpu/patch.rs`) then stops settling (stress error 1.9e-2 p, where
+    /// 1e-4 is asked).
+    pub pair_blocks: bool,
     /// Initial candidate capacity (words); `None`: 4 per slot, at least 1024. A search that
     /// needs more grows the buffer.
     pub candidate_capacity: Option<u32>,
@@ -117,6 +126,8 @@ pub(crate) struct Path {
     pub split: bool,
     /// On the one-workgroup path, extrapolated sweeps.
     pub extrapolate: bool,
+    /// On the one-workgroup path, node pairs met from both passes solved as 2 x 2 blocks.
+    pub pairs: bool,
     /// The stage in one workgroup before the search and one after it ([`one`]).
     pub one: bool,
     /// The search in one workgroup ([`search::search_one_path`]), at the start.
@@ -210,6 +221,7 @@ impl Path {
             multi,
             split,
             extrapolate: !options.plain_sweeps,
+            pairs: options.pair_blocks,
             one,
             search_one,
             search_switch,

@@ -4,7 +4,7 @@
 //! (against [`crate::element::evaluate`] in `tests/gpu.rs`).
 
 use crate::error::{Error, Result};
-use crate::gpu::contact::colouring::SERIAL;
+use crate::gpu::contact::colouring::{PAIR_INDEX, PAIR_LEADER, PARTNER};
 use crate::gpu::contact::narrow::CONS_SIZE;
 use crate::gpu::contact::tables::{GpuSegment, GpuSlot};
 
@@ -119,13 +119,15 @@ impl GpuSolver {
             return Err(Error::Gpu("contact buffers missing".into()));
         };
         let n = p.n_slots as u64;
-        let ends = SERIAL as u64 + 2;
+        let ends = PARTNER as u64 + 2;
         let (sb, cb) = (slots.size(), cons.size());
         let bytes = self.read_copies(
             "colouring_readback",
             &[
                 (&ws, 4 * p.o_loff as u64, 4 * ends),
                 (&ws, 4 * p.o_act as u64, 4 * n.max(1)),
+                (&ws, 4 * p.o_color as u64, 4 * n.max(1)),
+                (&ws, 4 * p.o_pair as u64, 4 * n.max(1)),
                 (&slots, 0, sb),
                 (&cons, 0, cb),
             ],
@@ -133,6 +135,8 @@ impl GpuSolver {
         let w: &[u32] = bytemuck::cast_slice(&bytes);
         let (offsets, rest) = w.split_at(ends as usize);
         let (act, rest) = rest.split_at(n.max(1) as usize);
+        let (listed, rest) = rest.split_at(n.max(1) as usize);
+        let (codes, rest) = rest.split_at(n.max(1) as usize);
         let (slot_words, cons_words) = rest.split_at((sb / 4) as usize);
         let table: Vec<GpuSlot> = bytemuck::pod_collect_to_vec(slot_words);
         let total = (offsets[ends as usize - 1] as usize).min(n as usize);
@@ -147,9 +151,15 @@ impl GpuSolver {
                 )
             })
             .collect();
+        let pairs = act[..total]
+            .iter()
+            .filter(|&&k| codes[k as usize] & PAIR_LEADER != 0)
+            .map(|&k| (k, listed[(codes[k as usize] & PAIR_INDEX) as usize]))
+            .collect();
         Ok(LastColouring {
             constraints,
             offsets: offsets.to_vec(),
+            pairs,
         })
     }
 
@@ -200,7 +210,11 @@ pub struct LastColouring {
     /// Its Lagrange constraints by colour, each its slot and its nodes (slave, segment ends;
     /// `u32::MAX` for a wall's missing segment).
     pub constraints: Vec<(u32, [u32; 3])>,
-    /// Where each colour starts in `constraints` (colours 0 to 31, then the serial colour), then
-    /// the end: [`SERIAL`] + 2 entries.
+    /// Where each colour starts in `constraints` (colours 0 to 31, the serial colour
+    /// [`crate::gpu::contact::colouring::SERIAL`], then the partners of the pairs, [`PARTNER`]),
+    /// then the end: [`PARTNER`] + 2 entries.
     pub offsets: Vec<u32>,
+    /// The pairs solved as 2 x 2 blocks: (leader's slot, partner's slot), the leader coloured
+    /// with both constraints' nodes, the partner listed under [`PARTNER`].
+    pub pairs: Vec<(u32, u32)>,
 }
