@@ -101,30 +101,28 @@ fn compacted_index(k: u32, na: u32) -> u32 {
     return lo;
 }
 
-// The 2 x 2 blocks of the sweeps (with cc.p.pairs; ContactSet::pair_blocks): two constraints
+// The 2 x 2 blocks of the sweeps (with PAIR_BLOCKS; ContactSet::pair_blocks): two constraints
 // each other's best partner (`best_partner`) are a pair, its lower slot the leader, which is
 // coloured with both constraints' nodes and sweeps both, its partner listed after the serial
 // colour (PARTNER). Each compacted slot's pair code into ws[o_pair..] (0 when unpaired). Mutual
 // best partners, where the CPU reference pairs greedily by score: the same pairs on every run,
 // in any thread order, from neighbours alone.
 fn pair_constraints(l: u32, na: u32) {
-    let pairs = cc.p.pairs != 0u;
-    if (pairs) {
-        for (var j = l; j < na; j += SG) {
-            let k = ws[cc.p.o_color + j];
-            ws[cc.p.o_best + k] = best_partner(k);
-        }
-        storageBarrier();
-        workgroupBarrier();
+    if (!PAIR_BLOCKS) {
+        return;
     }
     for (var j = l; j < na; j += SG) {
         let k = ws[cc.p.o_color + j];
+        ws[cc.p.o_best + k] = best_partner(k);
+    }
+    storageBarrier();
+    workgroupBarrier();
+    for (var j = l; j < na; j += SG) {
+        let k = ws[cc.p.o_color + j];
         var code = 0u;
-        if (pairs) {
-            let b = ws[cc.p.o_best + k];
-            if (b != NONE && ws[cc.p.o_best + b] == k) {
-                code = select(PAIR_PARTNER, PAIR_LEADER, k < b) | compacted_index(b, na);
-            }
+        let b = ws[cc.p.o_best + k];
+        if (b != NONE && ws[cc.p.o_best + b] == k) {
+            code = select(PAIR_PARTNER, PAIR_LEADER, k < b) | compacted_index(b, na);
         }
         ws[cc.p.o_pair + k] = code;
     }
@@ -132,9 +130,20 @@ fn pair_constraints(l: u32, na: u32) {
     workgroupBarrier();
 }
 
+// The pair code of the constraint of slot k (0, unpaired, without PAIR_BLOCKS).
+fn slot_code(k: u32) -> u32 {
+    if (!PAIR_BLOCKS) {
+        return 0u;
+    }
+    return ws[cc.p.o_pair + k];
+}
+
 // The pair code of compacted constraint j.
 fn pair_code(j: u32) -> u32 {
-    return ws[cc.p.o_pair + ws[cc.p.o_color + j]];
+    if (!PAIR_BLOCKS) {
+        return 0u;
+    }
+    return slot_code(ws[cc.p.o_color + j]);
 }
 
 // The slot of the other constraint of pair code `code` (a leader's or partner's).
@@ -157,6 +166,16 @@ fn unit_key(j: u32, t: u32, code: u32) -> u32 {
 // Whether the one-workgroup solve colours in parallel rounds in a hashed order (host-set:
 // crate::gpu::shader::Features::contact_parallel_colouring), or greedily in slot order.
 const PARALLEL_COLOURING: bool = true;
+
+// Whether the one-workgroup solve pairs node pairs met from both passes into 2 x 2 blocks
+// (host-set: crate::gpu::shader::Features::contact_pair_blocks, an option); without, none of the
+// pairing is compiled and a colouring unit is its constraint's three references.
+const PAIR_BLOCKS: bool = true;
+
+// References of a colouring unit: a constraint's three, and a leader's partner's three.
+fn unit_refs() -> u32 {
+    return select(3u, 6u, PAIR_BLOCKS);
+}
 
 // The colour a constraint takes: the first colour none of `used` (its coloured neighbours'
 // colours, bit 31 standing for 31 and the serial colour) holds, the serial colour when all 32
@@ -280,7 +299,7 @@ fn ref_node(k: u32, t: u32) -> u32 {
 // unit's keys' masks, and marks it there.
 fn colour_local(j: u32, used: u32, code: u32) {
     let col = first_free(used);
-    for (var t = 0u; t < 6u; t++) {
+    for (var t = 0u; t < unit_refs(); t++) {
         let key = unit_key(j, t, code);
         if (key != NONE) {
             atomicOr(&sh_key[key], colour_bit(col));
@@ -379,7 +398,7 @@ fn compact_local(l: u32, na: u32) -> bool {
                     continue;
                 }
                 var used = 0u;
-                for (var t = 0u; t < 6u; t++) {
+                for (var t = 0u; t < unit_refs(); t++) {
                     let key = unit_key(j, t, code);
                     if (key != NONE) {
                         used |= atomicLoad(&sh_key[key]);
@@ -400,7 +419,7 @@ fn compact_local(l: u32, na: u32) -> bool {
         for (var j = l; j < na; j += SG) {
             if (sh_cr[j] > PARTNER) {
                 let code = pair_code(j);
-                for (var t = 0u; t < 6u; t++) {
+                for (var t = 0u; t < unit_refs(); t++) {
                     let key = unit_key(j, t, code);
                     if (key != NONE) {
                         atomicStore(&sh_key[NODE_CAP + key], 0u);
@@ -413,7 +432,7 @@ fn compact_local(l: u32, na: u32) -> bool {
             let rank = sh_cr[j];
             if (rank > PARTNER) {
                 let code = pair_code(j);
-                for (var t = 0u; t < 6u; t++) {
+                for (var t = 0u; t < unit_refs(); t++) {
                     let key = unit_key(j, t, code);
                     if (key != NONE) {
                         atomicMax(&sh_key[NODE_CAP + key], rank);
@@ -431,7 +450,7 @@ fn compact_local(l: u32, na: u32) -> bool {
             let code = pair_code(j);
             var first = true;
             var used = 0u;
-            for (var t = 0u; t < 6u; t++) {
+            for (var t = 0u; t < unit_refs(); t++) {
                 let key = unit_key(j, t, code);
                 if (key != NONE) {
                     first = first && atomicLoad(&sh_key[NODE_CAP + key]) == rank;
@@ -486,7 +505,7 @@ fn compact_global(l: u32, na: u32) {
             let kp = select(NONE, paired_slot(code), (code & PAIR_LEADER) != 0u);
             var ready = true;
             var used = 0u;
-            for (var t = 0u; t < 6u && ready; t++) {
+            for (var t = 0u; t < unit_refs() && ready; t++) {
                 let u = select(kp, k, t < 3u);
                 if (u == NONE) {
                     break;
@@ -507,7 +526,7 @@ fn compact_global(l: u32, na: u32) {
                     }
                     if (s2 == 1u) {
                         // (An uncoloured partner waits on its leader's order.)
-                        let c2 = ws[cc.p.o_pair + k2];
+                        let c2 = slot_code(k2);
                         let lead = select(k2, paired_slot(c2), (c2 & PAIR_PARTNER) != 0u);
                         if (coloured_before(lead, k)) {
                             ready = false;
@@ -590,14 +609,14 @@ fn compact_global_serial(l: u32, na: u32) {
             }
             let kp = select(NONE, paired_slot(code), (code & PAIR_LEADER) != 0u);
             var used = 0u;
-            for (var t = 0u; t < 6u; t++) {
+            for (var t = 0u; t < unit_refs(); t++) {
                 let u = select(kp, k, t < 3u);
                 if (u != NONE) {
                     used |= mask_of(ref_node(u, t % 3u));
                 }
             }
             let col = first_free(used);
-            for (var t = 0u; t < 6u; t++) {
+            for (var t = 0u; t < unit_refs(); t++) {
                 let u = select(kp, k, t < 3u);
                 if (u != NONE) {
                     mark_node(ref_node(u, t % 3u), col);

@@ -110,7 +110,6 @@ struct ContactParams {
     f_row: u32,
     f_frow: u32,
     f_node: u32,
-    pairs: u32,           // 1: node pairs met from both passes solved as 2 x 2 blocks
     o_best: u32,          // per slot: its best partner (contact_colour.wgsl `pair_constraints`)
     o_pair: u32,          // per slot: its pair code (PAIR_LEADER / PAIR_PARTNER | the other's index)
 }

@@ -8,7 +8,7 @@
 // contact_colour.wgsl (the one-workgroup path's compaction and colouring, `compact`).
 //
 // Two paths, chosen by size on the host: `solve_one`, every sweep in one workgroup (colours
-// separated by barriers; the fastest for small contact sets; with cc.p.pairs, an option not
+// separated by barriers; the fastest for small contact sets; with PAIR_BLOCKS, an option not
 // taken by default, the two constraints of a node pair met from both passes swept together as a
 // 2 x 2 block, `block_packed`, as the CPU reference does: the striker's sweeps a step 2.5 x
 // fewer, but f32 fails the contact patch test's 8/6 mesh with them), and `sweep_color` + `recheck`, one
@@ -84,8 +84,10 @@ fn pack(l: u32) {
         fws[cc.p.f_node + nn] = vec4<f32>(0.0);
     }
     let na = sh_off[PARTNER + 1u];
-    for (var q = l; q < na; q += SG) {
-        ws[cc.p.o_best + ws[cc.p.o_act + q]] = q;
+    if (PAIR_BLOCKS) {
+        for (var q = l; q < na; q += SG) {
+            ws[cc.p.o_best + ws[cc.p.o_act + q]] = q;
+        }
     }
     storageBarrier();
     for (var q = l; q < na; q += SG) {
@@ -96,8 +98,10 @@ fn pack(l: u32) {
         ws[at] = ws[cc.p.o_mask + s];
         ws[at + 1u] = packed_index(c.a, nn);
         ws[at + 2u] = packed_index(c.b, nn);
-        let code = ws[cc.p.o_pair + k];
-        ws[at + 3u] = select(NONE, ws[cc.p.o_best + paired_slot(code)], (code & PAIR_LEADER) != 0u);
+        if (PAIR_BLOCKS) {
+            let code = ws[cc.p.o_pair + k];
+            ws[at + 3u] = select(NONE, ws[cc.p.o_best + paired_slot(code)], (code & PAIR_LEADER) != 0u);
+        }
         fws[cc.p.f_row + 2u * q] = vec4<f32>(c.n, c.g0, c.w);
         fws[cc.p.f_row + 2u * q + 1u] = vec4<f32>(c.lambda, c.lt, c.xi, c.mu);
         if (FRICTION && c.mu > 0.0) {
@@ -293,9 +297,11 @@ fn block_packed(q: u32, p: u32, dt: f32, inv_scale: f32) -> f32 {
 
 // Sweeps packed constraint q: with its partner as a 2 x 2 block when it leads a pair.
 fn sweep_packed(q: u32, dt: f32, inv_scale: f32, dummy: u32) -> f32 {
-    let p = ws[cc.p.o_cidx + 4u * q + 3u];
-    if (p != NONE) {
-        return block_packed(q, p, dt, inv_scale);
+    if (PAIR_BLOCKS) {
+        let p = ws[cc.p.o_cidx + 4u * q + 3u];
+        if (p != NONE) {
+            return block_packed(q, p, dt, inv_scale);
+        }
     }
     return pgs_packed(q, dt, inv_scale, dummy);
 }

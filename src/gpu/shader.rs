@@ -59,6 +59,10 @@ pub struct Features {
     /// order (WGSL `PARALLEL_COLOURING`; [`crate::gpu::contact::colouring`]) or greedily in slot
     /// order in one invocation (CPU adapters: [`crate::gpu::contact::parallel_colouring`]).
     pub contact_parallel_colouring: bool,
+    /// Whether the one-workgroup solve pairs the two constraints of a node pair met from both
+    /// passes and solves them as a 2 x 2 block (WGSL `PAIR_BLOCKS`;
+    /// [`crate::gpu::contact::ContactOptions::pair_blocks`], an option): compiled out otherwise.
+    pub contact_pair_blocks: bool,
 }
 
 /// Threads per workgroup of the per-item contact kernels (`crate::gpu::contact::CG`).
@@ -101,6 +105,7 @@ impl Default for Features {
                 256,
             ),
             contact_parallel_colouring: true,
+            contact_pair_blocks: false,
         }
     }
 }
@@ -158,6 +163,7 @@ impl Features {
                                         contact_group,
                                     ),
                                     contact_parallel_colouring: contact_group > 8,
+                                    contact_pair_blocks: !elastic,
                                 });
                             }
                         }
@@ -218,6 +224,7 @@ pub fn source(kernel: &str, features: Features) -> String {
                 ("SPRINGS", features.contact_springs),
                 ("FRICTION", features.contact_friction),
                 ("PARALLEL_COLOURING", features.contact_parallel_colouring),
+                ("PAIR_BLOCKS", features.contact_pair_blocks),
             ] {
                 if t.starts_with(&format!("const {name}: bool = true;")) {
                     out.push_str(&line.replacen("true", if on { "true" } else { "false" }, 1));

@@ -187,10 +187,8 @@ pub struct ContactParams {
     pub f_row: u32,
     pub f_frow: u32,
     pub f_node: u32,
-    /// 1: the one-workgroup solve pairs the two constraints of a node pair met from both passes
-    /// and solves them as a 2 x 2 block (`contact_colour.wgsl`, `pair_constraints`).
-    pub pairs: u32,
-    /// ws offsets of the pairing (`pair_constraints`), a word per slot each: each constraint's
+    /// ws offsets of the pairing (with WGSL `PAIR_BLOCKS`,
+    /// [`crate::gpu::shader::Features::contact_pair_blocks`]) (`pair_constraints`), a word per slot each: each constraint's
     /// best partner, then its pair code (leader or partner, and the other's compacted index).
     pub o_best: u32,
     pub o_pair: u32,
@@ -231,7 +229,7 @@ pub const PARAMS_SIZE: u64 = std::mem::size_of::<ContactParams>() as u64;
 pub const CTL_SIZE: u64 =
     PARAMS_SIZE + std::mem::size_of::<ContactCounters>() as u64 + 4 * MAX_SWEEP_SLOTS as u64 + 16;
 
-const _: () = assert!(std::mem::size_of::<ContactParams>() == 220);
+const _: () = assert!(std::mem::size_of::<ContactParams>() == 216);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 72);
 
 /// What the stages record their dispatches with: the contact bind group (group 0; its dynamic
@@ -455,7 +453,6 @@ impl ContactState {
             multi,
             split,
             extrapolate,
-            pairs,
             one,
             search_one,
             search_switch,
@@ -523,7 +520,6 @@ impl ContactState {
             friction: u32::from(friction),
             split: u32::from(split && !multi),
             extrapolate: u32::from(extrapolate && !multi),
-            pairs: u32::from(pairs && !multi),
             ..Default::default()
         };
         let work = layout_workspace(&mut params);

@@ -126,8 +126,6 @@ pub(crate) struct Path {
     pub split: bool,
     /// On the one-workgroup path, extrapolated sweeps.
     pub extrapolate: bool,
-    /// On the one-workgroup path, node pairs met from both passes solved as 2 x 2 blocks.
-    pub pairs: bool,
     /// The stage in one workgroup before the search and one after it ([`one`]).
     pub one: bool,
     /// The search in one workgroup ([`search::search_one_path`]), at the start.
@@ -221,7 +219,6 @@ impl Path {
             multi,
             split,
             extrapolate: !options.plain_sweeps,
-            pairs: options.pair_blocks,
             one,
             search_one,
             search_switch,

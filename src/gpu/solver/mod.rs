@@ -178,6 +178,7 @@ impl GpuSolver {
             contact_group,
             contact_cap,
             contact_parallel_colouring,
+            contact_pair_blocks: contact.pair_blocks,
         };
         let limits = ctx.device.limits();
         let most = limits
