@@ -21,15 +21,16 @@ fn pairable(k: u32) -> bool {
     return c.kind == KIND_LAGRANGE && c.a != NONE && c.w > 0.0 && !(c.mu > 0.0);
 }
 
-// Node t (0 slave, 1 and 2 segment ends) of the constraint of slot k, and its share of an impulse.
-fn share_of(c: Cons, t: u32) -> f32 {
+// The share of an impulse on node t of a constraint (0 its slave, 1 and 2 its segment's ends) at
+// the segment coordinate xi (used by the pairing and by `block_packed`).
+fn node_share(t: u32, xi: f32) -> f32 {
     if (t == 0u) {
         return 1.0;
     }
     if (t == 1u) {
-        return -(1.0 - c.xi);
+        return -(1.0 - xi);
     }
-    return -c.xi;
+    return -xi;
 }
 
 // How closely the constraints of slots k and k2 couple (ContactSet::pair_blocks' score): the
@@ -44,7 +45,7 @@ fn pair_score(k: u32, k2: u32) -> f32 {
         for (var u = 0u; u < 3u; u++) {
             if (ref_node(k2, u) == i) {
                 let im = c_ref[i].zw;
-                w += share_of(c, t) * share_of(d, u) * (c.n.x * d.n.x * im.x + c.n.y * d.n.y * im.y);
+                w += node_share(t, c.xi) * node_share(u, d.xi) * (c.n.x * d.n.x * im.x + c.n.y * d.n.y * im.y);
             }
         }
     }

@@ -210,16 +210,6 @@ fn packed_impulse(i: vec3<u32>, n: vec2<f32>, xi: f32, d: f32, inv_scale: f32) {
     fws[i.z] = vec4<f32>(nb.xy + -xi * d * inv_scale * n * nb.zw, nb.zw);
 }
 
-fn packed_share(t: u32, xi: f32) -> f32 {
-    if (t == 0u) {
-        return 1.0;
-    }
-    if (t == 1u) {
-        return -(1.0 - xi);
-    }
-    return -xi;
-}
-
 // Smallest determinant of a 2 x 2 block, relative to the product of its diagonal, that is solved
 // as a block (f32; the CPU reference's 1e-12 is below f32's resolution). Below it the two rows
 // are swept one after the other.
@@ -245,7 +235,7 @@ fn block_packed(q: u32, p: u32, dt: f32, inv_scale: f32) -> f32 {
         for (var u = 0u; u < 3u; u++) {
             if (ik[t] == ij[u]) {
                 let im = fws[ik[t]].zw;
-                wc += packed_share(t, xk) * packed_share(u, xj) * (nk.x * nj.x * im.x + nk.y * nj.y * im.y);
+                wc += node_share(t, xk) * node_share(u, xj) * (nk.x * nj.x * im.x + nk.y * nj.y * im.y);
             }
         }
     }
