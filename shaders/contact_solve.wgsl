@@ -27,6 +27,14 @@ var<workgroup> sh_max: atomic<u32>;
 var<workgroup> sh_split: u32;
 var<workgroup> sh_nn: u32;         // nodes of the compacted constraints (ws[o_nlist..])
 var<workgroup> sh_change: u32;     // f32 bits of the last sweep's largest change
+var<workgroup> sh_lw: u32;         // 1 when the sweeps keep their state in workgroup memory (`pack`)
+
+// Whether this solve's sweeps keep the packed nodes' records and the multipliers in workgroup
+// memory (`pack`; the same in every invocation, set from sh_lw).
+var<private> sw_local: bool;
+// Whether the sweeps may keep their state in workgroup memory (host-set:
+// crate::gpu::contact::local_sweeps; false on CPU adapters, where it is slower).
+const LOCAL_SWEEPS: bool = true;
 
 // Whether any invocation's `x` is positive, as a workgroup-uniform value: a tree over sh_m with
 // barriers, written by invocation 0 into a plain workgroup word. (Every exit of the solve loops
@@ -71,8 +79,10 @@ fn packed_index(i: u32, dummy: u32) -> u32 {
 // stands for a wall's missing segment. Each constraint q its nodes' packed indices and a
 // leader's partner's packed index, NONE for others (ws[o_cidx + 4q..]; the slots' packed
 // indices through ws[o_best..], free after the pairing), its row (n, g0, w), (lambda, lt, xi, mu) at fws[f_row + 2q..] and, with
-// friction, (wt, the free update's relative tangential velocity) at fws[f_frow + q]. `unpack`
-// writes dv and the multipliers back.
+// friction, (wt, the free update's relative tangential velocity) at fws[f_frow + q]. With
+// LOCAL_SWEEPS (GPUs), where they fit, the nodes' records and the multipliers move on into
+// workgroup memory for the sweeps (`node_rec`, `row1`: the rows they read from storage are then
+// read-only, but a friction row's lt). `unpack` writes dv and the multipliers back.
 fn pack(l: u32) {
     let nn = sh_nn;
     for (var j = l; j < nn; j += SG) {
@@ -87,6 +97,31 @@ fn pack(l: u32) {
     if (PAIR_BLOCKS) {
         for (var q = l; q < na; q += SG) {
             ws[cc.p.o_best + ws[cc.p.o_act + q]] = q;
+        }
+    }
+    // The sweeps' state in workgroup memory when it fits in what the compaction's arrays leave
+    // free after it: each node's record (dv in sh_ref, 1/m in sh_key, two words each, the zero
+    // record after the last included) and each constraint's multiplier (sh_cr). Between colours
+    // a sweep then waits on workgroup memory only: the rows it reads from storage are read-only
+    // there (but a friction row's lt, which only its own invocation touches within a sweep).
+    sw_local = false;
+    if (LOCAL_SWEEPS) {
+        if (l == 0u) {
+            sh_lw = select(0u, 1u, 2u * (nn + 1u) <= 3u * CAP_SIZE && na <= CAP_SIZE);
+        }
+        sw_local = workgroupUniformLoad(&sh_lw) != 0u;
+    }
+    if (LOCAL_SWEEPS && sw_local) {
+        for (var j = l; j <= nn; j += SG) {
+            var rec = vec4<f32>(0.0);
+            if (j < nn) {
+                let i = ws[cc.p.o_nlist + j];
+                rec = vec4<f32>(dv(i), c_ref[i].zw);
+            }
+            sh_ref[2u * j] = bitcast<u32>(rec.x);
+            sh_ref[2u * j + 1u] = bitcast<u32>(rec.y);
+            atomicStore(&sh_key[2u * j], bitcast<u32>(rec.z));
+            atomicStore(&sh_key[2u * j + 1u], bitcast<u32>(rec.w));
         }
     }
     storageBarrier();
@@ -104,25 +139,80 @@ fn pack(l: u32) {
         }
         fws[cc.p.f_row + 2u * q] = vec4<f32>(c.n, c.g0, c.w);
         fws[cc.p.f_row + 2u * q + 1u] = vec4<f32>(c.lambda, c.lt, c.xi, c.mu);
+        if (LOCAL_SWEEPS && sw_local) {
+            sh_cr[q] = bitcast<u32>(c.lambda);
+        }
         if (FRICTION && c.mu > 0.0) {
             fws[cc.p.f_frow + q] = vec4<f32>(c.wt, free_relative_along(c, s, tangent(c)), 0.0, 0.0);
         }
     }
     storageBarrier();
+    if (LOCAL_SWEEPS) {
+        workgroupBarrier();
+    }
+}
+
+// Packed node j's record (dv, 1/m), from workgroup memory or from fws.
+fn node_rec(j: u32) -> vec4<f32> {
+    if (LOCAL_SWEEPS && sw_local) {
+        return vec4<f32>(
+            bitcast<f32>(sh_ref[2u * j]),
+            bitcast<f32>(sh_ref[2u * j + 1u]),
+            bitcast<f32>(atomicLoad(&sh_key[2u * j])),
+            bitcast<f32>(atomicLoad(&sh_key[2u * j + 1u])),
+        );
+    }
+    return fws[cc.p.f_node + j];
+}
+
+// Packed node j's record written (only its dv changes in the sweeps).
+fn store_node(j: u32, r: vec4<f32>) {
+    if (LOCAL_SWEEPS && sw_local) {
+        sh_ref[2u * j] = bitcast<u32>(r.x);
+        sh_ref[2u * j + 1u] = bitcast<u32>(r.y);
+    } else {
+        fws[cc.p.f_node + j] = r;
+    }
+}
+
+// Packed constraint q's (lambda, lt, xi, mu), its multiplier from workgroup memory or from fws.
+fn row1(q: u32) -> vec4<f32> {
+    var r = fws[cc.p.f_row + 2u * q + 1u];
+    if (LOCAL_SWEEPS && sw_local) {
+        r.x = bitcast<f32>(sh_cr[q]);
+    }
+    return r;
+}
+
+// Packed constraint q's (lambda, lt, xi, mu) written (in workgroup memory its multiplier, and
+// with friction the rest in fws as well).
+fn store_row1(q: u32, r: vec4<f32>) {
+    if (LOCAL_SWEEPS && sw_local) {
+        sh_cr[q] = bitcast<u32>(r.x);
+        if (FRICTION) {
+            fws[cc.p.f_row + 2u * q + 1u] = r;
+        }
+    } else {
+        fws[cc.p.f_row + 2u * q + 1u] = r;
+    }
 }
 
 // The packed nodes' dv and the constraints' multipliers written back; the colour masks cleared.
 fn unpack(l: u32) {
+    if (LOCAL_SWEEPS) {
+        // (The rows' lt, written by other invocations in sweeps that end on workgroup barriers.)
+        storageBarrier();
+    }
     let nn = sh_nn;
     for (var j = l; j < nn; j += SG) {
         let i = ws[cc.p.o_nlist + j];
-        c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, fws[cc.p.f_node + j].xy);
+        c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, node_rec(j).xy);
         ws[cc.p.o_mask + i] = 0u;
     }
     let na = sh_off[PARTNER + 1u];
     for (var q = l; q < na; q += SG) {
         let k = ws[cc.p.o_act + q];
-        let r = fws[cc.p.f_row + 2u * q + 1u];
+        let r = row1(q);
         cons[k].lambda = r.x;
         cons[k].lt = r.y;
     }
@@ -132,14 +222,14 @@ fn unpack(l: u32) {
 // pgs_update on packed constraint q (`pack`; `dummy` the zero record): the same arithmetic.
 fn pgs_packed(q: u32, dt: f32, inv_scale: f32, dummy: u32) -> f32 {
     let r0 = fws[cc.p.f_row + 2u * q];
-    var r1 = fws[cc.p.f_row + 2u * q + 1u];
+    var r1 = row1(q);
     let at = cc.p.o_cidx + 4u * q;
-    let s = cc.p.f_node + ws[at];
-    let a = cc.p.f_node + ws[at + 1u];
-    let b = cc.p.f_node + ws[at + 2u];
-    var ns = fws[s];
-    var na = fws[a];
-    var nb = fws[b];
+    let s = ws[at];
+    let a = ws[at + 1u];
+    let b = ws[at + 2u];
+    var ns = node_rec(s);
+    var na = node_rec(a);
+    var nb = node_rec(b);
     let n = r0.xy;
     let xi = r1.z;
     var rel = dot(ns.xy, n);
@@ -176,38 +266,38 @@ fn pgs_packed(q: u32, dt: f32, inv_scale: f32, dummy: u32) -> f32 {
         }
     }
     if (moved) {
-        fws[s] = ns;
-        if (a != cc.p.f_node + dummy) {
-            fws[a] = na;
-            fws[b] = nb;
+        store_node(s, ns);
+        if (a != dummy) {
+            store_node(a, na);
+            store_node(b, nb);
         }
-        fws[cc.p.f_row + 2u * q + 1u] = r1;
+        store_row1(q, r1);
     }
     return change;
 }
 
-// The fws indices of packed constraint q's node records (slave, segment ends).
+// The packed indices of packed constraint q's nodes (slave, segment ends).
 fn packed_nodes(q: u32) -> vec3<u32> {
     let at = cc.p.o_cidx + 4u * q;
-    return vec3<u32>(ws[at], ws[at + 1u], ws[at + 2u]) + vec3<u32>(cc.p.f_node);
+    return vec3<u32>(ws[at], ws[at + 1u], ws[at + 2u]);
 }
 
 // The relative normal velocity change of packed constraint q (nodes `i`, normal n, xi) from
 // the packed nodes' dv, as pgs_packed sums it.
 fn packed_relative(i: vec3<u32>, n: vec2<f32>, xi: f32) -> f32 {
-    var rel = dot(fws[i.x].xy, n);
-    rel -= (1.0 - xi) * dot(fws[i.y].xy, n) + xi * dot(fws[i.z].xy, n);
+    var rel = dot(node_rec(i.x).xy, n);
+    rel -= (1.0 - xi) * dot(node_rec(i.y).xy, n) + xi * dot(node_rec(i.z).xy, n);
     return rel;
 }
 
 // Impulse d along n on packed constraint q's nodes (as pgs_packed applies it).
 fn packed_impulse(i: vec3<u32>, n: vec2<f32>, xi: f32, d: f32, inv_scale: f32) {
-    let ns = fws[i.x];
-    fws[i.x] = vec4<f32>(ns.xy + d * inv_scale * n * ns.zw, ns.zw);
-    let na = fws[i.y];
-    fws[i.y] = vec4<f32>(na.xy + -(1.0 - xi) * d * inv_scale * n * na.zw, na.zw);
-    let nb = fws[i.z];
-    fws[i.z] = vec4<f32>(nb.xy + -xi * d * inv_scale * n * nb.zw, nb.zw);
+    let ns = node_rec(i.x);
+    store_node(i.x, vec4<f32>(ns.xy + d * inv_scale * n * ns.zw, ns.zw));
+    let na = node_rec(i.y);
+    store_node(i.y, vec4<f32>(na.xy + -(1.0 - xi) * d * inv_scale * n * na.zw, na.zw));
+    let nb = node_rec(i.z);
+    store_node(i.z, vec4<f32>(nb.xy + -xi * d * inv_scale * n * nb.zw, nb.zw));
 }
 
 // Smallest determinant of a 2 x 2 block, relative to the product of its diagonal, that is solved
@@ -220,9 +310,9 @@ const BLOCK_DET: f32 = 1e-3;
 // that holds); returns the larger change of their gaps. The same arithmetic in f32.
 fn block_packed(q: u32, p: u32, dt: f32, inv_scale: f32) -> f32 {
     let r0k = fws[cc.p.f_row + 2u * q];
-    var r1k = fws[cc.p.f_row + 2u * q + 1u];
+    var r1k = row1(q);
     let r0j = fws[cc.p.f_row + 2u * p];
-    var r1j = fws[cc.p.f_row + 2u * p + 1u];
+    var r1j = row1(p);
     let ik = packed_nodes(q);
     let ij = packed_nodes(p);
     let nk = r0k.xy;
@@ -234,7 +324,7 @@ fn block_packed(q: u32, p: u32, dt: f32, inv_scale: f32) -> f32 {
     for (var t = 0u; t < 3u; t++) {
         for (var u = 0u; u < 3u; u++) {
             if (ik[t] == ij[u]) {
-                let im = fws[ik[t]].zw;
+                let im = node_rec(ik[t]).zw;
                 wc += node_share(t, xk) * node_share(u, xj) * (nk.x * nj.x * im.x + nk.y * nj.y * im.y);
             }
         }
@@ -275,12 +365,12 @@ fn block_packed(q: u32, p: u32, dt: f32, inv_scale: f32) -> f32 {
     if (dk != 0.0) {
         packed_impulse(ik, nk, xk, dk, inv_scale);
         r1k.x = mu.x;
-        fws[cc.p.f_row + 2u * q + 1u] = r1k;
+        store_row1(q, r1k);
     }
     if (dj != 0.0) {
         packed_impulse(ij, nj, xj, dj, inv_scale);
         r1j.x = mu.y;
-        fws[cc.p.f_row + 2u * p + 1u] = r1j;
+        store_row1(p, r1j);
     }
     return max(abs(wk * dk + wkj * dj), abs(wkj * dk + wj * dj));
 }
@@ -311,32 +401,38 @@ fn extrapolation(k: u32) -> f32 {
 // impulse: dv is linear in the multipliers, and a negative multiplier is projected by its own
 // update in the sweep); the values reached are kept for the next call. beta = 0 only keeps them.
 fn extrapolate(l: u32, beta: f32) {
+    if (LOCAL_SWEEPS) {
+        // (The rows' lt, written by other invocations in colours that end on workgroup barriers.)
+        storageBarrier();
+    }
     let na = sh_off[PARTNER + 1u];
     for (var q = l; q < na; q += SG) {
-        let row = cc.p.f_row + 2u * q + 1u;
-        let r = fws[row];
+        let r = row1(q);
         let now = r.xy;
         let at = cc.p.o_lprev + 2u * q;
         if (beta != 0.0) {
             let last = vec2<f32>(bitcast<f32>(ws[at]), bitcast<f32>(ws[at + 1u]));
-            fws[row] = vec4<f32>(now.x + beta * (now.x - last.x), now.y + beta * (now.y - last.y), r.zw);
+            store_row1(q, vec4<f32>(now.x + beta * (now.x - last.x), now.y + beta * (now.y - last.y), r.zw));
         }
         ws[at] = bitcast<u32>(now.x);
         ws[at + 1u] = bitcast<u32>(now.y);
     }
     let nn = sh_nn;
     for (var j = l; j < nn; j += SG) {
-        let r = fws[cc.p.f_node + j];
+        let r = node_rec(j);
         let now = r.xy;
         let at = cc.p.o_dvp + 2u * j;
         if (beta != 0.0) {
             let last = vec2<f32>(bitcast<f32>(ws[at]), bitcast<f32>(ws[at + 1u]));
-            fws[cc.p.f_node + j] = vec4<f32>(now + beta * (now - last), r.zw);
+            store_node(j, vec4<f32>(now + beta * (now - last), r.zw));
         }
         ws[at] = bitcast<u32>(now.x);
         ws[at + 1u] = bitcast<u32>(now.y);
     }
     storageBarrier();
+    if (LOCAL_SWEEPS) {
+        workgroupBarrier();
+    }
 }
 
 // Sweeps in one workgroup over the compacted Lagrange slots, extrapolated between sweeps when
@@ -360,6 +456,13 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
         sh_w = cc.p.extrapolate;
     }
     let extrapolating = workgroupUniformLoad(&sh_w) != 0u;
+    // Whether `pack` put the sweeps' state in workgroup memory (then the colours end on
+    // workgroup barriers: the rows in storage are read-only there, but a friction row's lt, which
+    // its own invocation alone touches in the colours).
+    var local = false;
+    if (LOCAL_SWEEPS) {
+        local = workgroupUniformLoad(&sh_lw) != 0u;
+    }
     var taken = 0u;
     var run = 0u;
     var last = 3.0e38;
@@ -381,7 +484,11 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
             for (var q = sh_off[col] + l; q < end; q += SG) {
                 change = max(change, sweep_packed(q, dt, inv_scale, dummy));
             }
-            storageBarrier();
+            if (local) {
+                workgroupBarrier();
+            } else {
+                storageBarrier();
+            }
         }
         if (l == 0u) {
             for (var q = sh_off[SERIAL]; q < sh_off[SERIAL + 1u]; q++) {

@@ -43,6 +43,9 @@ pub struct ContactTiming {
     /// How the GPU's one-workgroup solve colours its constraints (`None`: the adapter's default,
     /// [`crate::gpu::contact::parallel_colouring`]): a comparison.
     pub parallel_colouring: Option<bool>,
+    /// Where the GPU's one-workgroup solve keeps its sweeps' state (`None`: the adapter's
+    /// default, [`crate::gpu::contact::local_sweeps`]): a comparison.
+    pub local_sweeps: Option<bool>,
     /// How the GPU's contact search is dispatched (`None`: the default,
     /// [`crate::gpu::contact::search::search_one_path`]): a comparison.
     pub search_one: Option<bool>,
@@ -298,6 +301,7 @@ fn gpu_solvers(
         plain_sweeps: timing.plain_sweeps,
         pair_blocks: timing.pair_blocks,
         parallel_colouring: timing.parallel_colouring,
+        local_sweeps: timing.local_sweeps,
         search_one: timing.search_one,
         group: timing.group,
         ..Default::default()
@@ -417,6 +421,7 @@ mod tests {
             plain_sweeps: false,
             pair_blocks: false,
             parallel_colouring: None,
+            local_sweeps: None,
             search_one: None,
             group: None,
             record_ahead: None,

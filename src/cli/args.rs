@@ -164,6 +164,12 @@ pub struct BenchArgs {
     /// a comparison, for the tables and --profile.
     #[arg(long, value_enum)]
     pub colouring: Option<BenchColouring>,
+    /// Where the GPU's one-workgroup contact solve keeps the packed nodes' records and the
+    /// multipliers during its sweeps (default: in workgroup memory where they fit on GPUs,
+    /// through storage on CPU adapters; `ricochet::gpu::contact::local_sweeps`): a comparison,
+    /// for the tables and --profile.
+    #[arg(long, value_enum)]
+    pub sweep_memory: Option<BenchSweepMemory>,
     /// Record each GPU batch of steps only after the readback of the one before, instead of
     /// while the device runs it (`GpuSolver::set_record_ahead`; the GPUs' default, not the CPU
     /// adapters'): a comparison for the contact scenes' tables.
@@ -352,6 +358,15 @@ pub enum BenchColouring {
     Serial,
     /// Greedy in a hashed order, in parallel Jones-Plassmann rounds (the GPUs' default).
     Parallel,
+}
+
+/// `bench --sweep-memory`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchSweepMemory {
+    /// Read and written through storage (the CPU adapters' default).
+    Storage,
+    /// In workgroup memory where they fit (the GPUs' default).
+    Workgroup,
 }
 
 /// `bench --search`.

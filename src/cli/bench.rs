@@ -19,7 +19,9 @@ use ricochet::bench::{
 use ricochet::gpu::GpuContext;
 use ricochet::scene::Scene;
 
-use super::args::{BenchArgs, BenchBackend, BenchColouring, BenchScene, BenchSearch};
+use super::args::{
+    BenchArgs, BenchBackend, BenchColouring, BenchScene, BenchSearch, BenchSweepMemory,
+};
 
 /// The options of `ricochet bench` for the device check (`benches/device.sh`).
 #[derive(Args)]
@@ -58,6 +60,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         plain_sweeps,
         pair_blocks,
         colouring,
+        sweep_memory,
         no_record_ahead,
         search,
         contact_group,
@@ -66,6 +69,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         device,
     } = args;
     let parallel_colouring = colouring.map(|c| c == BenchColouring::Parallel);
+    let local_sweeps = sweep_memory.map(|m| m == BenchSweepMemory::Workgroup);
     let search_one = search.map(|s| s == BenchSearch::One);
     if rounds == 0 || steps == 0 {
         anyhow::bail!("--steps and --rounds must be positive");
@@ -127,7 +131,14 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
             &ctx,
             &scenes,
             (warmup, steps),
-            (parallel_colouring, search_one, contact_group, pair_blocks),
+            ricochet::gpu::contact::ContactOptions {
+                pair_blocks,
+                parallel_colouring,
+                local_sweeps,
+                search_one,
+                group: contact_group,
+                ..Default::default()
+            },
             json.as_deref(),
         );
     }
@@ -161,6 +172,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         plain_sweeps,
         pair_blocks,
         parallel_colouring,
+        local_sweeps,
         search_one,
         group: contact_group,
         record_ahead: no_record_ahead.then_some(false),
@@ -333,21 +345,9 @@ fn profile(
     ctx: &Arc<GpuContext>,
     scenes: &[(ProfileScene, Vec<usize>)],
     (warmup, steps): (u64, u64),
-    (parallel_colouring, search_one, group, pair_blocks): (
-        Option<bool>,
-        Option<bool>,
-        Option<u32>,
-        bool,
-    ),
+    options: ricochet::gpu::contact::ContactOptions,
     json: Option<&Path>,
 ) -> anyhow::Result<ExitCode> {
-    let options = ricochet::gpu::contact::ContactOptions {
-        pair_blocks,
-        parallel_colouring,
-        search_one,
-        group,
-        ..Default::default()
-    };
     let mut report = ProfileReport {
         adapter: ctx.adapter_name(),
         timestamps: ctx.timestamps,

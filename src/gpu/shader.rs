@@ -63,6 +63,11 @@ pub struct Features {
     /// passes and solves them as a 2 x 2 block (WGSL `PAIR_BLOCKS`;
     /// [`crate::gpu::contact::ContactOptions::pair_blocks`], an option): compiled out otherwise.
     pub contact_pair_blocks: bool,
+    /// Whether the one-workgroup solve's sweeps keep the packed nodes' records and the
+    /// multipliers in workgroup memory where they fit (WGSL `LOCAL_SWEEPS`; GPUs:
+    /// [`crate::gpu::contact::local_sweeps`]), or read and write them through storage (CPU
+    /// adapters): the same bits either way.
+    pub contact_local_sweeps: bool,
 }
 
 /// Threads per workgroup of the per-item contact kernels (`crate::gpu::contact::CG`).
@@ -106,6 +111,7 @@ impl Default for Features {
             ),
             contact_parallel_colouring: true,
             contact_pair_blocks: false,
+            contact_local_sweeps: true,
         }
     }
 }
@@ -164,6 +170,7 @@ impl Features {
                                     ),
                                     contact_parallel_colouring: contact_group > 8,
                                     contact_pair_blocks: !elastic,
+                                    contact_local_sweeps: contact_group > 8,
                                 });
                             }
                         }
@@ -225,6 +232,7 @@ pub fn source(kernel: &str, features: Features) -> String {
                 ("FRICTION", features.contact_friction),
                 ("PARALLEL_COLOURING", features.contact_parallel_colouring),
                 ("PAIR_BLOCKS", features.contact_pair_blocks),
+                ("LOCAL_SWEEPS", features.contact_local_sweeps),
             ] {
                 if t.starts_with(&format!("const {name}: bool = true;")) {
                     out.push_str(&line.replacen("true", if on { "true" } else { "false" }, 1));

@@ -217,7 +217,8 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
             "search-one",
             "group-512",
             "group-1024",
-            "pairs"
+            "pairs",
+            "storage"
         ]
     );
     for s in steps {
@@ -240,6 +241,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
         (10, "--contact-group 512"),
         (11, "--contact-group 1024"),
         (12, "--pair-blocks"),
+        (13, "--sweep-memory storage"),
     ] {
         assert!(steps[k]["file"].is_null());
         assert!(device_log.contains(flag), "{device_log}");
@@ -288,7 +290,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     let files = json_files(&dir);
     assert_eq!(files.len(), 1, "meta.json alone");
     let steps = files[0].1["steps"].as_array().expect("steps").clone();
-    assert_eq!(steps.len(), 13);
+    assert_eq!(steps.len(), 14);
     assert!(steps
         .iter()
         .all(|s| s["status"] == "skipped" && s["file"].is_null()));

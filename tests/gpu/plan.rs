@@ -257,6 +257,8 @@ fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
         pair_blocks: false,
         // (The GPUs' colouring, which lavapipe does not take by default.)
         parallel_colouring: Some(true),
+        // (The GPUs' sweeps in workgroup memory, which lavapipe does not take by default.)
+        local_sweeps: Some(true),
         search_one: None,
         group: None,
         // (Each batch recorded ahead, which lavapipe does not do by default.)

@@ -40,6 +40,11 @@ pub struct ContactOptions {
     /// test's 8/6 mesh (`tests/gpu/patch.rs`) then stops settling (stress error 1.9e-2 p, where
     /// 1e-4 is asked).
     pub pair_blocks: bool,
+    /// Whether the one-workgroup solve's sweeps keep the packed nodes' records (dv, 1/m) and the
+    /// multipliers in workgroup memory, in the compaction's arrays, free after it, where they fit
+    /// (`Some(true)`), or read and write them through storage (`Some(false)`); `None`:
+    /// [`local_sweeps`]. The same bits either way.
+    pub local_sweeps: Option<bool>,
     /// Initial candidate capacity (words); `None`: 4 per slot, at least 1024. A search that
     /// needs more grows the buffer.
     pub candidate_capacity: Option<u32>,
@@ -87,6 +92,16 @@ pub struct SearchSwitch {
 /// loop: the striker ran 5-11 % fewer steps a second (10^4 and 10^5 elements, 2026-11-28), with
 /// 7-12 % more sweeps in the hashed order than in slot order.
 pub fn parallel_colouring(device_type: wgpu::DeviceType) -> bool {
+    device_type != wgpu::DeviceType::Cpu
+}
+
+/// Whether the one-workgroup solve's sweeps keep their state in workgroup memory on an adapter of
+/// `device_type` ([`ContactOptions::local_sweeps`]): on GPUs, where the colours of a sweep then
+/// wait on workgroup barriers and workgroup memory instead of on storage, not on CPU adapters.
+/// On lavapipe workgroup memory is no faster than storage and the branches cost: the bench
+/// striker's contact stage took 1.22-1.31 ms a step at 10^5 elements with it against
+/// 0.99-1.10 ms without (2026-11-28).
+pub fn local_sweeps(device_type: wgpu::DeviceType) -> bool {
     device_type != wgpu::DeviceType::Cpu
 }
 

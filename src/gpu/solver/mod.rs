@@ -150,6 +150,9 @@ impl GpuSolver {
         let contact_parallel_colouring = contact
             .parallel_colouring
             .unwrap_or_else(|| super::contact::parallel_colouring(ctx.info.device_type));
+        let contact_local_sweeps = contact
+            .local_sweeps
+            .unwrap_or_else(|| super::contact::local_sweeps(ctx.info.device_type));
         let features = Features {
             dissipation: plan.has_dissipation(),
             fields: plan.has(Stage::Fields),
@@ -179,6 +182,7 @@ impl GpuSolver {
             contact_cap,
             contact_parallel_colouring,
             contact_pair_blocks: contact.pair_blocks,
+            contact_local_sweeps,
         };
         let limits = ctx.device.limits();
         let most = limits
