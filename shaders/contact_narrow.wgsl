@@ -583,6 +583,7 @@ fn narrow_active(j: u32) {
     cons[k] = c;
     if (c.kind == KIND_LAGRANGE) {
         atomicAdd(&cc.lagrange, 1u);
+        note_penetration(c);
     }
 }
 

@@ -410,7 +410,7 @@ fn report_end_step(l: u32) {
         }
         // A step whose last solve stopped at max_sweeps, still above the tolerance: on both
         // paths counted once per step, as on the CPU reference.
-        if (bitcast<f32>(cc.residual) > cc.p.tolerance) {
+        if (bitcast<f32>(cc.residual) > stop_tolerance()) {
             cc.unconverged += 1u;
         }
         // Non-negative floats order as their bits.

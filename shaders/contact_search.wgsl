@@ -138,6 +138,7 @@ fn plan_step() {
         atomicStore(&cc.n_colors, 0u);
     }
     atomicStore(&cc.lagrange, 0u);
+    atomicStore(&cc.penetration, 0u);
     cc.sweeps = 0u;
     cc.residual = 0u;
     for (var q = 0u; q < MAX_SWEEP_SLOTS; q++) {

@@ -436,35 +436,12 @@ fn extrapolate(l: u32, beta: f32) {
     }
 }
 
-// The stop of this solve's sweeps (`sweeps_one`; crate::gpu::contact::solve::STOP_PENETRATION):
-// STOP_PENETRATION times the largest penetration of the free update among its constraints,
-// within [STOP_FLOOR, 1] times cc.p.tolerance (1e-4 of the search margin). With the margin's
-// tolerance alone, a contact under a steady load, whose free update penetrates by a small part
-// of the margin a step (the contact patch test's 8/6 mesh: 8.6e-5 m a step against a stop of
-// 8e-6 m), stopped after one sweep a step with the multipliers up to a tenth of that step's
-// impulse off, and in some sweep orders (the GPUs' parallel colouring) they settled into an
-// oscillation instead of the uniform pressure (stress error 1.6e-2 p, kinetic over strain energy
-// 1.3e-4, 2026-11-28). Impacts, whose free update penetrates by far more, keep the margin's stop.
-const STOP_PENETRATION: f32 = 1e-2;
-const STOP_FLOOR: f32 = 0.1;
+// The stop of this solve's sweeps (`stop_tolerance`), the same in every invocation.
 fn step_tolerance(l: u32) -> f32 {
-    let na = sh_off[PARTNER + 1u];
-    var pen = 0.0;
-    for (var q = l; q < na; q += SG) {
-        pen = max(pen, -fws[cc.p.f_row + 2u * q].z);
-    }
     if (l == 0u) {
-        atomicStore(&sh_max, 0u);
+        sh_change = bitcast<u32>(stop_tolerance());
     }
-    workgroupBarrier();
-    // Non-negative floats order as their bits: one atomic, the same result in any order.
-    atomicMax(&sh_max, bitcast<u32>(pen));
-    workgroupBarrier();
-    if (l == 0u) {
-        sh_change = atomicLoad(&sh_max);
-    }
-    let largest = bitcast<f32>(workgroupUniformLoad(&sh_change));
-    return clamp(STOP_PENETRATION * largest, STOP_FLOOR * cc.p.tolerance, cc.p.tolerance);
+    return bitcast<f32>(workgroupUniformLoad(&sh_change));
 }
 
 // Sweeps in one workgroup over the compacted Lagrange slots, extrapolated between sweeps when
@@ -571,6 +548,7 @@ fn recheck_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> bool {
     c.g0 -= dt * relative(c, sl.s);
     c.dt_warm = dtn;
     cons[k] = c;
+    note_penetration(c);
     return true;
 }
 
@@ -648,7 +626,7 @@ fn recheck_active(@builtin(global_invocation_id) gid: vec3<u32>) {
 // Per-colour path. Sweep q (of (1 + ACTIVE_SET_ROUNDS) * max_sweeps) runs when the solve is still
 // going: the first sweep when there are Lagrange constraints, the first after a re-check when it
 // added constraints, any other when the previous sweep ran and changed a gap by more than the
-// tolerance (cc.change, cc.added).
+// step's tolerance (`stop_tolerance`; cc.change, cc.added).
 fn sweep_runs(q: u32) -> bool {
     if (q == 0u) {
         return atomicLoad(&cc.lagrange) > 0u;
@@ -657,7 +635,7 @@ fn sweep_runs(q: u32) -> bool {
         return atomicLoad(&cc.added[q / cc.p.max_sweeps - 1u]) > 0u;
     }
     let prev = atomicLoad(&cc.change[q - 1u]);
-    return prev != 0u && bitcast<f32>(prev) > cc.p.tolerance;
+    return prev != 0u && bitcast<f32>(prev) > stop_tolerance();
 }
 
 @compute @workgroup_size(CG)

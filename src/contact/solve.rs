@@ -10,8 +10,9 @@ use super::{warm_key, Constraint, ContactSet};
 /// (1 + [`ACTIVE_SET_ROUNDS`]) x this a step).
 pub const MAX_SWEEPS: usize = 500;
 /// Sweeps stop when no gap changes by more than this fraction of the search margin: 1e-5, ten
-/// times below the device's stop (`gpu::contact::solve::TOLERANCE`, 1e-4), so that the reference
-/// is more converged than what it checks, and far above what f64 resolves (gaps of coordinates
+/// times below the device's stop in an impact (`gpu::contact::solve::TOLERANCE`, 1e-4) and the
+/// device's tightest (`STOP_FLOOR` of it, under a steady load), so that the reference is at
+/// least as converged as what it checks, and far above what f64 resolves (gaps of coordinates
 /// about 10^3 margins wide to about 1e-13 of the margin).
 ///
 /// Below it, what the sweeps still change are the near-null modes of two passes' constraints on

@@ -52,8 +52,8 @@ pub struct Summary {
     /// See `contact_sweeps_mean`.
     pub contact_sweeps_max: u64,
     /// Lagrange contact: steps whose residual stayed above the tolerance (their sweeps stopped
-    /// at the sweep limit): `contact::SWEEP_TOLERANCE` on the CPU, `gpu::contact::solve::TOLERANCE`
-    /// on the GPU.
+    /// at the sweep limit): `contact::SWEEP_TOLERANCE` on the CPU, on the GPU the step's stop
+    /// (`gpu::contact::solve::STOP_PENETRATION`, between `STOP_FLOOR` and 1 times `TOLERANCE`).
     pub contact_unconverged: u64,
     /// Lagrange contact: the largest residual of a step, the largest change of a gap (or of a
     /// tangential slip) in the step's last sweep over the search margin (0 without), on both

@@ -5,7 +5,8 @@
 /// sweep still changed a gap by more than the tolerance after [`crate::contact::MAX_SWEEPS`]
 /// sweeps), naming how many, the largest residual where the backend measures it, and the
 /// tolerance of the backend that ran: [`crate::contact::SWEEP_TOLERANCE`] on the CPU reference,
-/// [`crate::gpu::contact::solve::TOLERANCE`] on the GPU. From the summary's `backend`, `steps`,
+/// on the GPU the step's, from [`crate::gpu::contact::solve::STOP_FLOOR`] to 1 times
+/// [`crate::gpu::contact::solve::TOLERANCE`] by the step's penetration. From the summary's `backend`, `steps`,
 /// `contact_unconverged` and `contact_residual_max`; `None` when every step converged.
 pub fn convergence_warning(
     backend: &str,
@@ -17,9 +18,13 @@ pub fn convergence_warning(
         return None;
     }
     let tolerance = if backend == "gpu" {
-        crate::gpu::contact::solve::TOLERANCE
+        use crate::gpu::contact::solve::{STOP_FLOOR, TOLERANCE};
+        format!(
+            "{:.0e} to {TOLERANCE:.0e} by the step's penetration",
+            STOP_FLOOR * TOLERANCE
+        )
     } else {
-        crate::contact::SWEEP_TOLERANCE
+        format!("{:.0e}", crate::contact::SWEEP_TOLERANCE)
     };
     let residual = match residual {
         Some(r) => format!("with a residual up to {r:.2e} of the search margin"),
@@ -28,7 +33,7 @@ pub fn convergence_warning(
     Some(format!(
         "the Lagrange contact did not converge in {} of {} steps: their sweeps stopped at the \
          limit ({} a solve) {residual} (the largest gap change of a step's last sweep; tolerance \
-         {:.0e})",
+         {})",
         unconverged,
         steps,
         crate::contact::MAX_SWEEPS,
@@ -60,10 +65,7 @@ mod tests {
         let g = convergence_warning("gpu", 10, 2, None).expect("a warning");
         assert!(g.contains("does not measure the residual"), "{g}");
         assert!(
-            g.contains(&format!(
-                "tolerance {:.0e}",
-                crate::gpu::contact::solve::TOLERANCE
-            )),
+            g.contains("tolerance 1e-5 to 1e-4 by the step's penetration"),
             "{g}"
         );
     }

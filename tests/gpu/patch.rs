@@ -1,9 +1,10 @@
 //! The contact patch test (`REFERENCES.md` section 3) on the GPU: pressure load, mass damping and
 //! contact kernels together (the CPU version is `tests/core/patch_contact.rs`). Two-pass Lagrange
 //! must carry the pressure exactly (stress error below 1e-4 p, here in f32), with the adapter's
-//! own solve and with the one GPUs take (parallel colouring at 256 threads, sweeps in workgroup
-//! memory), which lavapipe does not take by default; one pass reproduces the known failure; the
-//! GPU agrees with the CPU run of the same scene.
+//! own solve, with the one GPUs take (parallel colouring at 256 threads, sweeps in workgroup
+//! memory) and with the per-colour path GPUs take from `solve::MULTI_SLOTS` slots on, which
+//! lavapipe does not take by default; one pass reproduces the known failure; the GPU agrees with
+//! the CPU run of the same scene.
 
 use ricochet::gpu::contact::ContactOptions;
 
@@ -45,6 +46,22 @@ const AS_ON_GPUS: ContactOptions = ContactOptions {
     search_switch: None,
 };
 
+/// The per-colour solve path (`gpu::contact::solve::MULTI_SLOTS`), on any adapter.
+const PER_COLOUR: ContactOptions = ContactOptions {
+    multi: Some(true),
+    split: None,
+    one: None,
+    plain_sweeps: false,
+    pair_blocks: false,
+    local_sweeps: None,
+    candidate_capacity: None,
+    group: None,
+    compact_local: None,
+    parallel_colouring: None,
+    search_one: None,
+    search_switch: None,
+};
+
 /// Settles the patch scene on the CPU reference (`gpu` None) or on the GPU with these contact
 /// options.
 fn settle(
@@ -60,7 +77,11 @@ fn settle(
     let sign = if first == "upper" { 1.0 } else { -1.0 };
     let dir = crate::scratch(&format!(
         "gpu-patch-{lower}-{upper}-{first}-{}",
-        gpu.map_or("cpu", |o| if o == AS_ON_GPUS { "gpus" } else { "gpu" })
+        gpu.map_or("cpu", |o| match o {
+            AS_ON_GPUS => "gpus",
+            PER_COLOUR => "colour",
+            _ => "gpu",
+        })
     ));
     let (r, displacement) = if let Some(options) = gpu {
         let ctx = context().expect("adapter");
@@ -102,6 +123,7 @@ fn gpu_two_pass_lagrange_passes_the_contact_patch_test_and_matches_the_cpu() {
             for (solve, options) in [
                 ("the adapter's", ContactOptions::default()),
                 ("as on GPUs", AS_ON_GPUS),
+                ("per-colour", PER_COLOUR),
             ] {
                 let g = settle(Some(options), lower, upper, first, keys);
                 let umax = c

@@ -225,9 +225,10 @@ pub struct ContactCounters {
 
 /// Bytes of WGSL `ContactParams`, at the start of `ContactCtl`.
 pub const PARAMS_SIZE: u64 = std::mem::size_of::<ContactParams>() as u64;
-/// Bytes of WGSL `ContactCtl`: the parameters, the counters, the per-sweep changes.
+/// Bytes of WGSL `ContactCtl`: the parameters, the counters, the per-sweep changes, the
+/// re-checks' additions and the step's largest penetration.
 pub const CTL_SIZE: u64 =
-    PARAMS_SIZE + std::mem::size_of::<ContactCounters>() as u64 + 4 * MAX_SWEEP_SLOTS as u64 + 16;
+    PARAMS_SIZE + std::mem::size_of::<ContactCounters>() as u64 + 4 * MAX_SWEEP_SLOTS as u64 + 20;
 
 const _: () = assert!(std::mem::size_of::<ContactParams>() == 216);
 const _: () = assert!(std::mem::size_of::<ContactCounters>() == 72);

@@ -29,20 +29,23 @@ pub const MULTI_SWEEPS: u32 = 16;
 /// an element, so this is about 50 f32 units of a gap: reachable, and 1e-5 of half an element.
 pub const TOLERANCE: f64 = 1e-4;
 
-/// The one-workgroup solve stops its sweeps at this fraction of the largest penetration of the
-/// step's free update among its constraints, within [`STOP_FLOOR`] and 1 times [`TOLERANCE`] of
-/// the margin (WGSL `step_tolerance`). With the margin's tolerance alone, a contact under a
-/// steady load stopped after one sweep a step with the multipliers up to a tenth of that step's
-/// impulse off: on the contact patch test's 8/6 mesh (8.6e-5 m of free penetration a step, a
-/// stop of 8e-6 m), the GPUs' parallel colouring settled into an oscillation instead of the
-/// uniform pressure (stress error 1.6e-2 p, kinetic over strain energy 1.3e-4, on lavapipe with
-/// the GPUs' options, 2026-11-28), where the slot order passed. Impacts, whose free update
+/// The Lagrange solve stops its sweeps at this fraction of the largest penetration of the step's
+/// free update among its constraints, within [`STOP_FLOOR`] and 1 times [`TOLERANCE`] of the
+/// margin, on both paths (WGSL `stop_tolerance`; the narrow phase and the re-checks keep the
+/// step's largest penetration in the contact state), and a step whose last sweep changed a gap
+/// by more counts as not converged. With the margin's tolerance alone, a contact under a steady
+/// load stopped after one sweep a step with the multipliers up to a tenth of that step's impulse
+/// off: on the contact patch test's 8/6 mesh (8.6e-5 m of free penetration a step, a stop of
+/// 8e-6 m), the GPUs' parallel colouring (stress error 1.6e-2 p, kinetic over strain energy
+/// 1.3e-4, on lavapipe with the GPUs' options, 2026-11-28) and the per-colour path (2.5e-2 p,
+/// 2026-11-29) settled into an oscillation instead of the uniform pressure, where the
+/// one-workgroup solve in slot order passed. Impacts, whose free update
 /// penetrates by far more than the margin's tolerance a hundredfold, keep it: the bench
 /// striker's sweeps stayed 15.4 (10^4 elements) and 27.7 (10^5); the pile's resting disks went
 /// 1.2 -> 1.9 a step.
 pub const STOP_PENETRATION: f64 = 1e-2;
 
-/// The tightest stop of the one-workgroup solve, as a fraction of [`TOLERANCE`]: 1e-5 of the
+/// The tightest stop of the device's solve, as a fraction of [`TOLERANCE`]: 1e-5 of the
 /// margin, the CPU reference's stop ([`crate::contact::SWEEP_TOLERANCE`]), about 5 f32 units of
 /// a gap.
 pub const STOP_FLOOR: f64 = 0.1;
@@ -132,14 +135,15 @@ impl SolveKernels {
 mod tests {
     use super::*;
 
-    /// The WGSL stop (`step_tolerance`) has the constants documented here, and its floor is
+    /// The WGSL stop (`stop_tolerance`) has the constants documented here, and its floor is
     /// the CPU reference's stop.
     #[test]
     fn the_kernel_stops_where_the_constants_say() {
-        assert!(SOURCE.contains(&format!(
+        let common = super::super::COMMON;
+        assert!(common.contains(&format!(
             "const STOP_PENETRATION: f32 = {STOP_PENETRATION:e};"
         )));
-        assert!(SOURCE.contains(&format!("const STOP_FLOOR: f32 = {STOP_FLOOR};")));
+        assert!(common.contains(&format!("const STOP_FLOOR: f32 = {STOP_FLOOR};")));
         assert!((STOP_FLOOR * TOLERANCE - crate::contact::SWEEP_TOLERANCE).abs() < 1e-20);
     }
 }
