@@ -1252,6 +1252,8 @@ mod fuzz;
 mod general;
 #[path = "gpu/patch.rs"]
 mod patch;
+#[path = "gpu/paths.rs"]
+mod paths;
 #[path = "gpu/plan.rs"]
 mod plan;
 #[path = "gpu/plastic.rs"]
