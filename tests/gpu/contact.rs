@@ -625,7 +625,8 @@ fn gpu_augmented_lagrange_leaves_no_penetration_in_a_persistent_contact() {
 
 /// The small shipped scenes with Lagrange contact converge in every step on the GPU as on the
 /// CPU reference (`tests/core/contact.rs`, `shipped_scenes_converge_in_every_contact_step`):
-/// `contact_unconverged` 0 at the device's tolerance (`gpu::contact::solve::TOLERANCE`). The
+/// `contact_unconverged` 0 at the device's tolerance (the step's, at most
+/// `gpu::contact::solve::TOLERANCE`). The
 /// larger ones (notched plate, disk on a wall, the piles, the striker) were run by hand on
 /// lavapipe on 2026-11-27: 0 unconverged steps each (README, "GPU backend").
 #[test]
@@ -671,9 +672,11 @@ fn small_shipped_scenes_converge_in_every_contact_step() {
 /// The GPU measures contact convergence as the CPU reference does (issue: contact that did not
 /// converge said aloud): `contact_residual_max` is the largest change of a gap in a step's last
 /// sweep over the search margin, and `contact_unconverged` counts the steps whose residual stayed
-/// above `gpu::contact::solve::TOLERANCE`, once per step, on every solve path: the default one
+/// above the step's tolerance (`gpu::contact::solve::STOP_PENETRATION`, at most
+/// `gpu::contact::solve::TOLERANCE`), once per step, on every solve path: the default one
 /// (`small_shipped_scenes_converge_in_every_contact_step`), the one-workgroup solve with its
-/// re-checks split apart, and the per-colour path (16 sweeps a round, not extrapolated).
+/// re-checks split apart, and the per-colour path (16 sweeps a round, up to 80 a step, not
+/// extrapolated).
 #[test]
 fn gpu_contact_residual_is_measured_on_every_solve_path() {
     let Some(ctx) = context() else { return };
@@ -718,11 +721,18 @@ fn gpu_contact_residual_is_measured_on_every_solve_path() {
             s.contact_unconverged,
             s.steps
         );
-        assert_eq!(
-            s.contact_unconverged > 0,
-            residual > ricochet::gpu::contact::solve::TOLERANCE,
-            "{what}: {} steps above the tolerance, residual {residual:e}",
-            s.contact_unconverged
-        );
+        // A step counts when its last sweep changed a gap by more than the step's own
+        // tolerance, from STOP_FLOOR to 1 times TOLERANCE of the margin.
+        use ricochet::gpu::contact::solve::{STOP_FLOOR, TOLERANCE};
+        if residual > TOLERANCE {
+            assert!(s.contact_unconverged > 0, "{what}: residual {residual:e}");
+        }
+        if s.contact_unconverged > 0 {
+            assert!(
+                residual > STOP_FLOOR * TOLERANCE,
+                "{what}: {} steps above the tolerance, residual {residual:e}",
+                s.contact_unconverged
+            );
+        }
     }
 }

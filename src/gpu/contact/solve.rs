@@ -20,8 +20,13 @@ pub const MODULE: (&str, &[&str]) = (
 /// Sweeps per solve at most on the device (one-workgroup path), as on the CPU.
 pub const MAX_SWEEPS: u32 = crate::contact::MAX_SWEEPS as u32;
 
-/// Sweeps per round at most on the per-colour path (each sweep is one dispatch per colour, so
-/// they are recorded ahead; WGSL `MAX_SWEEP_SLOTS` = 5 rounds of these).
+/// Sweeps per round on the per-colour path (each sweep is one dispatch per colour, so they are
+/// recorded ahead; WGSL `MAX_SWEEP_SLOTS` = 5 rounds of these). A solve still above its tolerance
+/// at a round's last sweep goes on in the next round's sweeps (after that round's re-check), so a
+/// step takes up to 80: with 16 a solve and a new one only after a re-check that added
+/// constraints, the per-colour path left 39 of the 0.3 c impact's steps unconverged
+/// (`tests/gpu/stress.rs`, 1.4e-6 m of penetration reported, 1 step and 5.5e-8 m going on;
+/// the one-workgroup path 0 and 4.1e-8 m) on lavapipe, 2026-11-29.
 pub const MULTI_SWEEPS: u32 = 16;
 
 /// A sweep converges when no gap changes by more than this fraction of the search margin. The
