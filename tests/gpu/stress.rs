@@ -1,10 +1,12 @@
 //! Stress cases of `assets/stress/` (REFERENCES.md section 6) on the GPU, against the same bounds
 //! as the CPU tests (`tests/core/stress.rs`): the penalty 1000 x stiffer than the default (step
 //! reduced to the formula, no energy gained) and the projectile crossing a thin plate within one
-//! step (caught by the swept contact test).
+//! step (caught by the swept contact test); the thin plate and the 0.3 c impact also on the
+//! per-colour solve path that GPUs take from `gpu::contact::solve::MULTI_SLOTS` slots on.
 
 use std::path::Path;
 
+use ricochet::gpu::contact::ContactOptions;
 use ricochet::gpu::GpuSolver;
 use ricochet::run::{run, schedule, RunResult};
 
@@ -29,10 +31,58 @@ fn run_gpu(text: &str, name: &str) -> Option<(RunResult, ricochet::model::Model)
 
 /// As `run_gpu`, with the displacement at the end.
 fn run_gpu_u(text: &str, name: &str) -> Option<(RunResult, ricochet::model::Model, Vec<[f64; 2]>)> {
+    run_gpu_with(text, name, ContactOptions::default())
+}
+
+/// The solve paths the impacts below run on: the adapter's (by size) and the per-colour one.
+const PATHS: [(&str, ContactOptions); 2] = [
+    (
+        "default",
+        ContactOptions {
+            multi: None,
+            split: None,
+            one: None,
+            plain_sweeps: false,
+            pair_blocks: false,
+            local_sweeps: None,
+            candidate_capacity: None,
+            group: None,
+            compact_local: None,
+            parallel_colouring: None,
+            search_one: None,
+            search_switch: None,
+        },
+    ),
+    (
+        "per-colour",
+        ContactOptions {
+            multi: Some(true),
+            split: None,
+            one: None,
+            plain_sweeps: false,
+            pair_blocks: false,
+            local_sweeps: None,
+            candidate_capacity: None,
+            group: None,
+            compact_local: None,
+            parallel_colouring: None,
+            search_one: None,
+            search_switch: None,
+        },
+    ),
+];
+
+/// As `run_gpu_u`, with these contact options.
+fn run_gpu_with(
+    text: &str,
+    name: &str,
+    options: ContactOptions,
+) -> Option<(RunResult, ricochet::model::Model, Vec<[f64; 2]>)> {
     let ctx = context()?;
     let (scene, model, plan) = load(text, name);
     let dir = crate::scratch(&format!("gpu-stress-{name}"));
-    let mut gpu = GpuSolver::new(ctx, &model, &plan, schedule(&scene)).expect("gpu solver");
+    let mut gpu = GpuSolver::with_options(ctx, &model, &plan, schedule(&scene), None, options)
+        .expect("gpu solver");
     let r = run(&scene, &model, &plan, &mut gpu, &dir, None).expect("gpu run");
     let u = gpu.displacement_now().expect("displacement");
     let _ = std::fs::remove_dir_all(&dir);
@@ -76,9 +126,17 @@ fn gpu_stiff_penalty_reduces_the_step_and_gains_no_energy() {
 #[test]
 fn gpu_projectile_crossing_a_thin_plate_within_one_step_is_caught() {
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let Some((r, _)) = run_gpu(&stress_asset("thin_plate.toml"), "plate") else {
-        return;
-    };
+    for (path, options) in PATHS {
+        let Some((r, _, _)) = run_gpu_with(&stress_asset("thin_plate.toml"), "plate", options)
+        else {
+            return;
+        };
+        thin_plate(&r, path);
+    }
+}
+
+/// The thin plate's checks of run `r` on solve path `path`.
+fn thin_plate(r: &RunResult, path: &str) {
     assert_eq!(r.summary.status, "completed", "{}", r.summary.message);
     let thickness = 5.0e-5;
     let crossing = 600.0 * r.summary.dt_min / thickness;
@@ -89,12 +147,16 @@ fn gpu_projectile_crossing_a_thin_plate_within_one_step_is_caught() {
         .fold(0.0f64, f64::max);
     let last = &r.samples.last().expect("rows").0;
     println!(
-        "gpu thin plate: {crossing:.2} thicknesses per step, reported penetration {pen:.2e} m, \
-         energy error {:.2e}, projectile {:.1} m/s, plate {:.1} m/s",
-        r.summary.max_energy_error, last.body_velocity[0][0], last.body_velocity[1][0]
+        "gpu thin plate, {path} solve: {crossing:.2} thicknesses per step, reported penetration \
+         {pen:.2e} m, energy error {:.2e}, projectile {:.1} m/s, plate {:.1} m/s, {} unconverged \
+         steps",
+        r.summary.max_energy_error,
+        last.body_velocity[0][0],
+        last.body_velocity[1][0],
+        r.summary.contact_unconverged
     );
     assert!(crossing > 1.0);
-    assert!(pen < 1e-2 * thickness, "penetration {pen}");
+    assert!(pen < 1e-2 * thickness, "{path}: penetration {pen}");
     assert!(r.summary.max_energy_error < 0.02);
     assert!(last.body_velocity[0][0] < 0.0, "the projectile rebounds");
     assert!(last.body_velocity[1][0] > 0.0, "the plate is pushed");
@@ -142,23 +204,32 @@ fn gpu_impact_at_0_3_c_leaves_no_node_inside_the_other_block() {
             &format!("initial_velocity = [{:e}, 0.0]", 0.3 * 5172.19),
         )
         .replace("linear_elastic", "neo_hookean");
-    let Some((r, model, u)) = run_gpu_u(&text, "fast") else {
-        return;
-    };
+    for (path, options) in PATHS {
+        let Some((r, model, u)) = run_gpu_with(&text, "fast", options) else {
+            return;
+        };
+        fast_impact(&r, &model, &u, h, path);
+    }
+}
+
+/// The 0.3 c impact's checks of run `r` (`model`, final displacements `u`, element size `h`) on
+/// solve path `path`.
+fn fast_impact(r: &RunResult, model: &ricochet::model::Model, u: &[[f64; 2]], h: f64, path: &str) {
     assert_eq!(r.summary.status, "completed", "{}", r.summary.message);
-    let deepest = interpenetration(&model, &u);
+    let deepest = interpenetration(model, u);
     let pen = r
         .samples
         .iter()
         .map(|(s, _)| s.contacts[0].max_penetration)
         .fold(0.0f64, f64::max);
     println!(
-        "gpu v0/c = 0.3: node inside the other block at the end {deepest:.2e} m ({:.1e} h), \
-         reported penetration {pen:.2e} m, energy error {:.2e}",
+        "gpu v0/c = 0.3, {path} solve: node inside the other block at the end {deepest:.2e} m \
+         ({:.1e} h), reported penetration {pen:.2e} m, energy error {:.2e}, {} unconverged steps",
         deepest / h,
-        r.summary.max_energy_error
+        r.summary.max_energy_error,
+        r.summary.contact_unconverged
     );
-    assert!(deepest < 1e-2 * h, "{deepest:e} m inside");
-    assert!(pen < 1e-3 * h);
+    assert!(deepest < 1e-2 * h, "{path}: {deepest:e} m inside");
+    assert!(pen < 1e-3 * h, "{path}: reported penetration {pen:e} m");
     assert!(r.summary.max_energy_error < 0.05);
 }
