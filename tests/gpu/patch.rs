@@ -32,34 +32,17 @@ struct Settled {
 /// The one-workgroup solve as GPUs take it by default (`gpu::contact::one_group`,
 /// `parallel_colouring`, `local_sweeps`), on any adapter.
 const AS_ON_GPUS: ContactOptions = ContactOptions {
-    multi: None,
-    split: None,
     one: Some(false),
-    plain_sweeps: false,
-    pair_blocks: false,
     local_sweeps: Some(true),
-    candidate_capacity: None,
     group: Some(256),
-    compact_local: None,
     parallel_colouring: Some(true),
-    search_one: None,
-    search_switch: None,
+    ..ContactOptions::DEFAULT
 };
 
 /// The per-colour solve path (`gpu::contact::solve::MULTI_SLOTS`), on any adapter.
 const PER_COLOUR: ContactOptions = ContactOptions {
     multi: Some(true),
-    split: None,
-    one: None,
-    plain_sweeps: false,
-    pair_blocks: false,
-    local_sweeps: None,
-    candidate_capacity: None,
-    group: None,
-    compact_local: None,
-    parallel_colouring: None,
-    search_one: None,
-    search_switch: None,
+    ..ContactOptions::DEFAULT
 };
 
 /// Settles the patch scene on the CPU reference (`gpu` None) or on the GPU with these contact

@@ -36,38 +36,12 @@ fn run_gpu_u(text: &str, name: &str) -> Option<(RunResult, ricochet::model::Mode
 
 /// The solve paths the impacts below run on: the adapter's (by size) and the per-colour one.
 const PATHS: [(&str, ContactOptions); 2] = [
-    (
-        "default",
-        ContactOptions {
-            multi: None,
-            split: None,
-            one: None,
-            plain_sweeps: false,
-            pair_blocks: false,
-            local_sweeps: None,
-            candidate_capacity: None,
-            group: None,
-            compact_local: None,
-            parallel_colouring: None,
-            search_one: None,
-            search_switch: None,
-        },
-    ),
+    ("default", ContactOptions::DEFAULT),
     (
         "per-colour",
         ContactOptions {
             multi: Some(true),
-            split: None,
-            one: None,
-            plain_sweeps: false,
-            pair_blocks: false,
-            local_sweeps: None,
-            candidate_capacity: None,
-            group: None,
-            compact_local: None,
-            parallel_colouring: None,
-            search_one: None,
-            search_switch: None,
+            ..ContactOptions::DEFAULT
         },
     ),
 ];

@@ -11,7 +11,7 @@ use super::{one, search, solve};
 
 /// Choices of the contact stage a caller may make (tests, benchmarks); the defaults decide by
 /// adapter and size.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ContactOptions {
     /// The per-colour solve path (`Some(true)`) or one workgroup (`Some(false)`); `None`:
     /// [`solve::multi_path`].
@@ -72,6 +72,31 @@ pub struct ContactOptions {
     /// [`search::SEARCH_ONE_ITEMS`] and [`search::SEARCH_ONE_RARE_ITEMS`] nodes and slots). Not
     /// with `search_one` set. The same bits either way.
     pub search_switch: Option<SearchSwitch>,
+}
+
+impl Default for ContactOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl ContactOptions {
+    /// The defaults ([`Default`]), as a constant: `ContactOptions { multi: Some(true),
+    /// ..ContactOptions::DEFAULT }` in a `const`.
+    pub const DEFAULT: Self = Self {
+        multi: None,
+        split: None,
+        one: None,
+        plain_sweeps: false,
+        pair_blocks: false,
+        local_sweeps: None,
+        candidate_capacity: None,
+        group: None,
+        compact_local: None,
+        parallel_colouring: None,
+        search_one: None,
+        search_switch: None,
+    };
 }
 
 /// The search's switch between its per-item kernels, which cost their empty dispatches on every
