@@ -2,8 +2,8 @@
 //! contact kernels together (the CPU version is `tests/core/patch_contact.rs`). Two-pass Lagrange
 //! must carry the pressure exactly (stress error below 1e-4 p, here in f32), with the adapter's
 //! own solve, with the one GPUs take (parallel colouring at 256 threads, sweeps in workgroup
-//! memory) and with the per-colour path GPUs take from `solve::MULTI_SLOTS` slots on, which
-//! lavapipe does not take by default; one pass reproduces the known failure; the GPU agrees with
+//! memory) and, on the 8/6 mesh, with the per-colour path GPUs take from `solve::MULTI_SLOTS`
+//! slots on, which lavapipe does not take by default; one pass reproduces the known failure; the GPU agrees with
 //! the CPU run of the same scene.
 
 use ricochet::gpu::contact::ContactOptions;
@@ -103,11 +103,16 @@ fn gpu_two_pass_lagrange_passes_the_contact_patch_test_and_matches_the_cpu() {
     for (lower, upper) in MESHES {
         for first in ["upper", "lower"] {
             let c = settle(None, lower, upper, first, keys);
+            // The per-colour path on the mesh that failed it (8/6, either body first; CI time).
+            let per_colour = (lower, upper) == (8, 6);
             for (solve, options) in [
                 ("the adapter's", ContactOptions::default()),
                 ("as on GPUs", AS_ON_GPUS),
                 ("per-colour", PER_COLOUR),
             ] {
+                if options == PER_COLOUR && !per_colour {
+                    continue;
+                }
                 let g = settle(Some(options), lower, upper, first, keys);
                 let umax = c
                     .displacement
