@@ -238,7 +238,8 @@ fn dv(i: u32) -> vec2<f32> {
 }
 
 fn add_dv(i: u32, d: vec2<f32>) {
-    c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, c_pv[3u * i + 2u].zw + d);
+    c_pv[3u * i + 2u].z += d.x;
+    c_pv[3u * i + 2u].w += d.y;
 }
 
 // Whether the contact kernels run this step.

@@ -10,6 +10,31 @@
 // dt during an active-set re-check (trial positions corrected by dt dv), else 0.
 var<private> corr_dt: f32 = 0.0;
 
+// What x_n and x_tr read of a local node: its reference position, its positions at u_n and at
+// the trial u_{n+1}, and its dv. A loop over candidates reads its slave's once and each
+// segment's ends once (lavapipe loads storage lane by lane, and a read_write buffer's repeated
+// loads are not merged).
+struct At {
+    r: vec2<f32>,
+    n: vec2<f32>,
+    tr: vec2<f32>,
+    dv: vec2<f32>,
+}
+
+fn node_at(i: u32) -> At {
+    let p = pos(i);
+    return At(c_ref[i].xy, p.xy, p.zw, dv(i));
+}
+
+// i - j at u_n and at the trial positions, from their reads.
+fn xn(i: At, j: At) -> vec2<f32> {
+    return (i.r - j.r) + (i.n - j.n);
+}
+
+fn xt(i: At, j: At) -> vec2<f32> {
+    return (i.r - j.r) + (i.tr - j.tr) + corr_dt * (i.dv - j.dv);
+}
+
 fn x_n(i: u32, j: u32) -> vec2<f32> {
     return (c_ref[i].xy - c_ref[j].xy) + (pos(i).xy - pos(j).xy);
 }
@@ -245,19 +270,22 @@ struct Qual {
     len: f32,
 }
 
-fn qualify(s: u32, own: vec2<f32>, j: u32, penalty: bool, carried: f32) -> Qual {
+// Slave `s` (its reads) against candidate segment j.
+fn qualify(s: At, own: vec2<f32>, j: u32, penalty: bool, carried: f32) -> Qual {
     var r: Qual;
     r.ok = false;
     let sg = segs[j];
-    let seg_t = x_n(sg.b, sg.a);
+    let a = node_at(sg.a);
+    let b = node_at(sg.b);
+    let seg_t = xn(b, a);
     if (dot(own, vec2<f32>(seg_t.y, -seg_t.x)) >= 0.0) {
         return r;
     }
     // Projection at the trial positions (Lagrange) or at u_n (penalty).
-    var d = x_tr(s, sg.a);
-    var t = x_tr(sg.b, sg.a);
+    var d = xt(s, a);
+    var t = xt(b, a);
     if (penalty) {
-        d = x_n(s, sg.a);
+        d = xn(s, a);
         t = seg_t;
     }
     let pr = project(d, t, sg.axis);
@@ -279,7 +307,7 @@ fn qualify(s: u32, own: vec2<f32>, j: u32, penalty: bool, carried: f32) -> Qual 
         r.k0 = gap;
         r.k1 = 0.0;
     } else {
-        let before = line_gap(x_n(s, sg.a), seg_t);
+        let before = line_gap(xn(s, a), seg_t);
         if (!(gap < 0.0 && before > -0.5 * len)) {
             return r;
         }
@@ -376,6 +404,7 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32
     let penalty = SPRINGS && (sl.info & SLOT_PENALTY) != 0u;
     let t_own = x_n(sl.nn, sl.np);
     let own = vec2<f32>(t_own.y, -t_own.x);
+    let sa = node_at(s);
     var found = false;
     var best: Qual;
     var best_j = 0u;
@@ -383,7 +412,7 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32
     let end = ws[cc.p.o_coff + k + 1u];
     for (var q = begin; q < end; q++) {
         let j = grow[q];
-        let r = qualify(s, own, j, penalty, carried);
+        let r = qualify(sa, own, j, penalty, carried);
         if (r.ok && (!found || r.k0 > best.k0 || (r.k0 == best.k0 && r.k1 > best.k1))) {
             found = true;
             best = r;
@@ -449,7 +478,7 @@ fn narrow_pass(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32
         } else {
             continue;
         }
-        let r = qualify(s, own, j2, penalty, carried);
+        let r = qualify(sa, own, j2, penalty, carried);
         if (!r.ok) {
             continue;
         }
@@ -531,8 +560,7 @@ fn narrow_wall(sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32) -> Con
 }
 
 // `carried`: the augmented Lagrangian's multiplier of the slot's last step (0: none).
-fn narrow_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32, carried: f32) -> Cons {
-    let sl = slots[k];
+fn narrow_slot(k: u32, sl: Slot, dt: f32, dtn: f32, inv_scale: f32, carried: f32) -> Cons {
     if ((sl.info & SLOT_WALL) != 0u) {
         return with_friction(narrow_wall(sl, dt, dtn, inv_scale, carried), sl, inv_scale);
     }
@@ -570,7 +598,7 @@ fn narrow_active(j: u32) {
     if (SPRINGS && sl.ar > 0.0 && old.kind == KIND_PENALTY) {
         carried = old.ft;
     }
-    var c = narrow_slot(k, dt, dtn, inv_mass_scale(), carried);
+    var c = narrow_slot(k, sl, dt, dtn, inv_mass_scale(), carried);
     if (SPRINGS && FRICTION && c.kind == KIND_PENALTY && sl.mu > 0.0) {
         c = penalty_friction(c, sl, old, dt, dtn, inv_mass_scale());
     }
@@ -604,10 +632,12 @@ fn gather_node(i: u32) {
     let end = ws[cc.p.o_noff + i + 1u];
     for (var q = ws[cc.p.o_noff + i]; q < end; q++) {
         let k = grow[b + q];
-        let c = cons[k];
-        if (c.kind == KIND_NONE || !(c.lambda > 0.0)) {
+        // Only the slots with an impulse load their constraint (lavapipe loads storage per lane,
+        // skipping only the lanes that do not run).
+        if (cons[k].kind == KIND_NONE || !(cons[k].lambda > 0.0)) {
             continue;
         }
+        let c = cons[k];
         var share = 0.0;
         if (slots[k].s == i) {
             share = 1.0;
@@ -619,5 +649,7 @@ fn gather_node(i: u32) {
         // (Penalty friction: its tangential impulse too; 0 for a warm start.)
         d += share * inv_scale * (c.lambda * c.n + c.lt * tangent(c));
     }
-    c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, d * c_ref[i].zw);
+    let dm = d * c_ref[i].zw;
+    c_pv[3u * i + 2u].z = dm.x;
+    c_pv[3u * i + 2u].w = dm.y;
 }

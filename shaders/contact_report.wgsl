@@ -65,7 +65,8 @@ fn finish_node(i: u32) -> vec4<f32> {
         vn = vl.xy + y;
         v_prev[cc.p.n_nodes + g] = y - (vn - vl.xy * cc.p.one);
     }
-    c_pv[3u * i + 2u] = vec4<f32>(vn, d);
+    c_pv[3u * i + 2u].x = vn.x;
+    c_pv[3u * i + 2u].y = vn.y;
     if (d.x != 0.0 || d.y != 0.0) {
         let g = c_nodes[i].x;
         let m = bitcast<f32>(c_nodes[i].y);
@@ -98,10 +99,10 @@ fn interface_of(k: u32) -> u32 {
 
 // (impulse on the first body, 1 if active, penetration) of slot k's constraint.
 fn slot_report(k: u32, dt: f32) -> vec4<f32> {
-    let c = cons[k];
-    if (c.kind == KIND_NONE) {
+    if (cons[k].kind == KIND_NONE) {
         return vec4<f32>(0.0);
     }
+    let c = cons[k];
     var r = vec4<f32>(0.0);
     if (c.lambda > 0.0) {
         r = vec4<f32>(c.sign * c.lambda * c.n, 1.0, 0.0);
@@ -121,10 +122,10 @@ fn slot_report(k: u32, dt: f32) -> vec4<f32> {
 // impulses J (v^{n-1/2} + v^{n+1/2}) / 2 on the free directions of its nodes (as the CPU sums
 // m dv_friction per node), the part after t_n, 0). After `finish`: c_pv[3i + 2].xy is v^{n+1/2}.
 fn slot_friction(k: u32) -> vec4<f32> {
-    let c = cons[k];
-    if (c.kind == KIND_NONE || c.lt == 0.0) {
+    if (cons[k].kind == KIND_NONE || cons[k].lt == 0.0) {
         return vec4<f32>(0.0);
     }
+    let c = cons[k];
     let t = tangent(c);
     let s = slots[k].s;
     var nodes = array<u32, 3>(s, c.a, c.b);

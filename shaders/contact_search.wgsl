@@ -52,7 +52,8 @@ fn prep_node(i: u32) {
         vo = 2.0 * vo - v;
     }
     c_pv[3u * i + 1u] = vec4<f32>(v, vo);
-    c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, 0.0, 0.0);
+    c_pv[3u * i + 2u].z = 0.0;
+    c_pv[3u * i + 2u].w = 0.0;
     let r = fws[cc.p.f_usearch + i].xy;
     let d0 = un - r;
     let d1 = ut - r;

@@ -207,7 +207,9 @@ fn unpack(l: u32) {
     let nn = sh_nn;
     for (var j = l; j < nn; j += SG) {
         let i = ws[cc.p.o_nlist + j];
-        c_pv[3u * i + 2u] = vec4<f32>(c_pv[3u * i + 2u].xy, node_rec(j).xy);
+        let r = node_rec(j).xy;
+        c_pv[3u * i + 2u].z = r.x;
+        c_pv[3u * i + 2u].w = r.y;
         ws[cc.p.o_mask + i] = 0u;
     }
     let na = sh_off[PARTNER + 1u];
@@ -534,12 +536,12 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
 // A free Lagrange slot re-checked at the corrected positions x_tr + dt dv (ContactSet::recheck);
 // whether it now has a constraint.
 fn recheck_slot(k: u32, dt: f32, dtn: f32, inv_scale: f32) -> bool {
-    let sl = slots[k];
-    if (cons[k].kind != KIND_NONE || (SPRINGS && (sl.info & SLOT_PENALTY) != 0u)) {
+    if (cons[k].kind != KIND_NONE || (SPRINGS && (slots[k].info & SLOT_PENALTY) != 0u)) {
         return false;
     }
+    let sl = slots[k];
     corr_dt = dt;
-    var c = narrow_slot(k, dt, dtn, inv_scale, 0.0);
+    var c = narrow_slot(k, sl, dt, dtn, inv_scale, 0.0);
     corr_dt = 0.0;
     if (c.kind != KIND_LAGRANGE) {
         return false;
