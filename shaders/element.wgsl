@@ -363,7 +363,12 @@ fn failure_check(fp: Failure, s: vec4<f32>, f: vec4<f32>, f33: f32, alpha_old: f
 @compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let e = gid.x;
-    if (e >= params.n_elems || ctrl.state != STATE_RUNNING) {
+    // The step's control words, read before any lane returns (lavapipe loads an address that
+    // every lane shares once while no lane has left; after that, lane by lane).
+    let state = ctrl.state;
+    let flags = ctrl.flags;
+    let dt_prev = ctrl.dt_prev;
+    if (e >= params.n_elems || state != STATE_RUNNING) {
         return;
     }
 //#if failure
@@ -496,7 +501,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
 //#endif
-        let s = j2_update(b, h, jm1, zm1, ps0, ps1.x, true, ctrl.dt_prev, soft);
+        let s = j2_update(b, h, jm1, zm1, ps0, ps1.x, true, dt_prev, soft);
         pk = s.pk;
         p33 = s.p33;
         w = s.stored;
@@ -505,7 +510,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         alpha_new = s.alpha;
         var acc = ps1.y;
         if (s.yielded) {
-            let dtp = ctrl.dt_prev;
+            let dtp = dt_prev;
             if (dtp > 0.0) {
                 // The start of the step that yielded, from the old state, no return.
                 let ho = h - dtp * fd;
@@ -526,7 +531,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             t_star = clamp(heat / b.melt_rise, 0.0, 1.0);
         }
 //#endif
-        if ((ctrl.flags & FLAG_SAMPLE) != 0u) {
+        if ((flags & FLAG_SAMPLE) != 0u) {
             var off = params.n_nodes + params.n_elems + params.n_cons;
             if (params.loads != 0u) {
                 off += params.n_nodes;
@@ -677,7 +682,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     {
         let s0 = elem_state[ES * e];
         let p0 = elem_state[ES * e + 1u];
-        let dtp = ctrl.dt_prev;
+        let dtp = dt_prev;
         let hg_work = 0.5 * dtp * dot(hg_rate, s0.xy + hg_q);
         var bulk_work = 0.5 * a0t * dtp * dot(p0 + bulk_p, fd);
 //#if axisymmetric
@@ -695,7 +700,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var damage = eroding.z;
     var failed = false;
     if (fp.flags != 0u) {
-        let check = failure_check(fp, cauchy, f, hoop_stretch, alpha_old, alpha_new, ctrl.dt_prev, eroding.z, t_star);
+        let check = failure_check(fp, cauchy, f, hoop_stretch, alpha_old, alpha_new, dt_prev, eroding.z, t_star);
         damage = check.x;
         failed = check.y != 0.0;
     }
@@ -710,7 +715,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             // now on, no inversion check. Its strain and stored hourglass energy leave with it,
             // less the half-step work of its unapplied forces (dot(f_n, v^{n-1/2}) dt / 2); its
             // viscous and plastic work of the step are done, its dissipative state cleared.
-            let half_work = 0.5 * ctrl.dt_prev * (dot(fx, vx) + dot(fy, vy));
+            let half_work = 0.5 * dt_prev * (dot(fx, vx) + dot(fy, vy));
             let energy = w * a0t + hg_stored + half_work;
             erosion[e] = vec4<f32>(energy, 1.0, damage, select(select(0.0, 2.0, small_step), 1.0, inverted));
             // For the contact surfaces to follow (an integer count, and a list whose order the
@@ -758,7 +763,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     elem_force[4u * e + 2u] = vec2<f32>(fx.z, fy.z);
     elem_force[4u * e + 3u] = vec2<f32>(fx.w, fy.w);
     elem_dt[e] = dt;
-    if ((ctrl.flags & FLAG_SAMPLE) != 0u) {
+    if ((flags & FLAG_SAMPLE) != 0u) {
         sample_src[params.n_nodes + e] = vec4<f32>(w * a0t, hg_stored, works);
     }
 }

@@ -44,7 +44,13 @@ fn gravity_now() -> vec2<f32> {
 @compute @workgroup_size(WG)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if (i >= params.n_nodes || ctrl.state != STATE_RUNNING) {
+    // The step's control words, read before any lane returns (lavapipe loads an address that
+    // every lane shares once while no lane has left; after that, lane by lane).
+    let state = ctrl.state;
+    let dt_node = ctrl.dt_node;
+    let dt_next = ctrl.dt_next;
+    let flags = ctrl.flags;
+    if (i >= params.n_nodes || state != STATE_RUNNING) {
         return;
     }
     var f = vec2<f32>(0.0);
@@ -62,9 +68,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     f += gravity_now() / inv_mass[i];
     let c = ctrl.damp_c;
     // v+ - v- = -2c / (1 + c) v- + dt_n f / (m (1 + c)).
-    let inc = (-2.0 * c / (1.0 + c)) * vm + (ctrl.dt_node * inv_mass[i] / (1.0 + c)) * f;
+    let inc = (-2.0 * c / (1.0 + c)) * vm + (dt_node * inv_mass[i] / (1.0 + c)) * f;
 //#else
-    let inc = (ctrl.dt_node * inv_mass[i]) * f;
+    let inc = (dt_node * inv_mass[i]) * f;
 //#endif
     // Kahan: v+ = v- + (inc + the last residual), and the new residual y - (v+ - v-); v- enters
     // the subtraction as v- * params.one, which the compiler cannot fold away.
@@ -75,7 +81,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (not_finite(vp.x) || not_finite(vp.y)) {
         atomicMin(&ctrl.bad_node, i);
     }
-    let flags = ctrl.flags;
     if ((flags & (FLAG_SAMPLE | FLAG_SNAPSHOT)) != 0u) {
         // v^{-1/2} = 2 v_0 - v^{1/2} on the first step.
         let vq = select(vm, 2.0 * vm - vp, ctrl.step == 0u);
@@ -98,7 +103,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         // a contact or a load would otherwise stop moving while its velocity (and the work of
         // the forces on it) does not.
         let ru = 2u * params.n_nodes + i;
-        let yu = ctrl.dt_next * vp + v_prev[ru];
+        let yu = dt_next * vp + v_prev[ru];
         u = s.xy + yu;
         v_prev[ru] = yu - (u - s.xy * params.one);
     }
