@@ -35,12 +35,13 @@ fn xt(i: At, j: At) -> vec2<f32> {
     return (i.r - j.r) + (i.tr - j.tr) + corr_dt * (i.dv - j.dv);
 }
 
+// Local node i - local node j at u_n and at the trial positions.
 fn x_n(i: u32, j: u32) -> vec2<f32> {
-    return (c_ref[i].xy - c_ref[j].xy) + (pos(i).xy - pos(j).xy);
+    return xn(node_at(i), node_at(j));
 }
 
 fn x_tr(i: u32, j: u32) -> vec2<f32> {
-    return (c_ref[i].xy - c_ref[j].xy) + (pos(i).zw - pos(j).zw) + corr_dt * (dv(i) - dv(j));
+    return xt(node_at(i), node_at(j));
 }
 
 // Signed distance to the line a -> b of the vector d = p - a along t = b - a.

@@ -52,7 +52,7 @@ pub const EXTRAPOLATION: f64 = 0.9;
 /// with Nesterov's factor (k - 1) / (k + 2), 15 / 59 with this one (the device's plain sweeps:
 /// 51 / 500); 80 x 80 (38 400 elements) 30 / 218 Nesterov, 19 / 75 this; 141 x 141 (1.2e5
 /// elements) 33 / 158 Nesterov, 20 / 79 this (factors 0.8, 0.85 and 0.95: 24, 22 and 23 there).
-/// BENCHMARKS.md, session 17.
+/// BENCHMARKS.md, 2026-11-24 (ab4eb8f).
 pub fn extrapolation(k: u32) -> f64 {
     if k < 2 {
         0.0
