@@ -4,7 +4,8 @@
 //   fused small models), then t_{n+1}, the flags of the next step (sample / snapshot / end, same
 //   rules as step::Clock) and the indirect dispatch sizes.
 // Compiled after tree.wgsl and reduce_common.wgsl (the lanes' shares and the trees, shared with
-// reduce.wgsl).
+// reduce.wgsl). Its workgroup's threads, RG, are Features::control_group (8 on CPU adapters),
+// which may be fewer than the first level's (reduce.wgsl's RG, Features::reduce_group).
 
 const RG: u32 = 256u;
 const TREE: u32 = RG;
@@ -64,12 +65,16 @@ fn control_dt(@builtin(local_invocation_id) lid: vec3<u32>) {
     if (params.dt_groups == 0u) {
         lane_min_dt(l, 0u, RG);
     } else {
+        // The first level's partials (as many as its workgroups, at most the reductions' RG,
+        // which may exceed this workgroup's), each lane's share at a stride.
         var d = 3.0e38;
         var ix = NONE;
-        if (l < params.dt_groups) {
-            let p = dt_partial[l];
-            d = bitcast<f32>(p.x);
-            ix = p.y;
+        for (var g = l; g < params.dt_groups; g += RG) {
+            let p = dt_partial[g];
+            if (better(d, ix, bitcast<f32>(p.x), p.y)) {
+                d = bitcast<f32>(p.x);
+                ix = p.y;
+            }
         }
         sh_dt[l] = d;
         sh_ix[l] = ix;

@@ -17,7 +17,18 @@ pub const SOURCE: &str = concat!(
     include_str!("../../shaders/control.wgsl")
 );
 
-/// The pipeline of entry point `entry` (`control_dt`, `control_end`).
+/// The pipeline of entry point `entry` (`control_dt`, `control_end`), in a workgroup of
+/// [`Features::control_group`] threads (its WGSL `RG`; the first level of the reductions keeps
+/// [`Features::reduce_group`]).
+///
+/// On lavapipe each group of 8 lanes of a workgroup runs as a coroutine, and each barrier of the
+/// trees switches all of them: the 10^4 pile's `control_dt` and `control_end` (both reducing
+/// directly, `state::FUSED_LIMIT`) took 33-53 us a step less at 8 threads than at 64, of about
+/// 1 400 (BENCHMARKS.md, 2026-11-29).
 pub(crate) fn pipeline(device: &Device, features: Features, entry: &str) -> ComputePipeline {
-    compute_pipeline(device, entry, SOURCE, features, entry, None)
+    let control = Features {
+        reduce_group: features.control_group,
+        ..features
+    };
+    compute_pipeline(device, entry, SOURCE, control, entry, None)
 }

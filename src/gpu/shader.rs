@@ -47,6 +47,10 @@ pub struct Features {
     /// Threads per workgroup of the reductions and control kernels (WGSL `RG`): 256 on GPUs,
     /// 64 on CPU adapters such as lavapipe, where each barrier costs a coroutine switch per lane group.
     pub reduce_group: u32,
+    /// Threads of the run control kernels' one workgroup (WGSL `RG` of `shaders/control.wgsl`):
+    /// 256 on GPUs, 8 on CPU adapters, where every barrier of its trees switches each lane
+    /// group's coroutine ([`crate::gpu::control`]).
+    pub control_group: u32,
     /// Threads of the one-workgroup contact kernels (WGSL `SG`: the search's scans, the
     /// one-workgroup Lagrange solve, the reports' end): 256 on GPUs, 8 on CPU adapters
     /// ([`crate::gpu::contact::one_group`]).
@@ -104,6 +108,7 @@ impl Default for Features {
             contact_springs: true,
             contact_friction: true,
             reduce_group: 256,
+            control_group: 256,
             contact_group: 256,
             contact_cap: local_constraints(
                 wgpu::Limits::default().max_compute_workgroup_storage_size,
@@ -146,7 +151,9 @@ impl Features {
                         (true, false, true, false),
                         (true, false, false, true),
                     ] {
-                        for (reduce_group, contact_group) in [(64, 8), (256, 256)] {
+                        for (reduce_group, control_group, contact_group) in
+                            [(64, 8, 8), (256, 256, 256)]
+                        {
                             for elastic in [false, true] {
                                 v.push(Features {
                                     dissipation,
@@ -163,6 +170,7 @@ impl Features {
                                     contact_springs: elastic,
                                     contact_friction: elastic,
                                     reduce_group,
+                                    control_group,
                                     contact_group,
                                     contact_cap: local_constraints(
                                         wgpu::Limits::default().max_compute_workgroup_storage_size,

@@ -178,6 +178,7 @@ impl GpuSolver {
             contact_friction: model.contacts.iter().any(|c| c.friction > 0.0)
                 || model.walls.iter().any(|w| w.friction > 0.0),
             reduce_group: if cpu_adapter { 64 } else { 256 },
+            control_group: if cpu_adapter { 8 } else { 256 },
             contact_group,
             contact_cap,
             contact_parallel_colouring,
