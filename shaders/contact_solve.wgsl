@@ -86,31 +86,35 @@ fn packed_index(i: u32, dummy: u32) -> u32 {
 // read-only, but a friction row's lt). `unpack` writes dv and the multipliers back.
 fn pack(l: u32) {
     let nn = sh_nn;
-    for (var j = l; j < nn; j += SG) {
-        let i = ws[cc.p.o_nlist + j];
-        fws[cc.p.f_node + j] = vec4<f32>(dv(i), c_ref[i].zw);
-        ws[cc.p.o_mask + i] = j;
-    }
-    if (l == 0u) {
-        fws[cc.p.f_node + nn] = vec4<f32>(0.0);
-    }
     let na = sh_off[PARTNER + 1u];
-    if (PAIR_BLOCKS) {
-        for (var q = l; q < na; q += SG) {
-            ws[cc.p.o_best + ws[cc.p.o_act + q]] = q;
-        }
-    }
     // The sweeps' state in workgroup memory when it fits in what the compaction's arrays leave
     // free after it: each node's record (dv in sh_ref, 1/m in sh_key, two words each, the zero
     // record after the last included) and each constraint's multiplier (sh_cr). Between colours
     // a sweep then waits on workgroup memory only: the rows it reads from storage are read-only
     // there (but a friction row's lt, which only its own invocation touches within a sweep).
+    // The nodes' records go to storage only when they stay there (`node_rec`).
     sw_local = false;
     if (LOCAL_SWEEPS) {
         if (l == 0u) {
             sh_lw = select(0u, 1u, 2u * (nn + 1u) <= 3u * CAP_SIZE && na <= CAP_SIZE);
         }
         sw_local = workgroupUniformLoad(&sh_lw) != 0u;
+    }
+    let in_storage = !(LOCAL_SWEEPS && sw_local);
+    for (var j = l; j < nn; j += SG) {
+        let i = ws[cc.p.o_nlist + j];
+        if (in_storage) {
+            fws[cc.p.f_node + j] = vec4<f32>(dv(i), c_ref[i].zw);
+        }
+        ws[cc.p.o_mask + i] = j;
+    }
+    if (l == 0u && in_storage) {
+        fws[cc.p.f_node + nn] = vec4<f32>(0.0);
+    }
+    if (PAIR_BLOCKS) {
+        for (var q = l; q < na; q += SG) {
+            ws[cc.p.o_best + ws[cc.p.o_act + q]] = q;
+        }
     }
     if (LOCAL_SWEEPS && sw_local) {
         for (var j = l; j <= nn; j += SG) {
