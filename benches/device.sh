@@ -40,8 +40,8 @@
 #               step 5's 256 (the GPUs' default)                                  -> device.log
 #  12. group-1024 the same at 1024 threads                                        -> device.log
 #  13. pairs    the profile of the striker at 10^4, 10^5 and 10^6 with the one-workgroup solve's
-#               2 x 2 blocks of node pairs (`--pair-blocks`, not the default: f32 fails the
-#               patch test with them), beside step 5's constraints one by one        -> device.log
+#               constraints swept one by one (`--pair-blocks off`, the GPUs' way before
+#               2026-11-29), beside step 5's 2 x 2 blocks of node pairs            -> device.log
 #  14. storage  the profile of the striker at 10^4, 10^5 and 10^6 with the one-workgroup solve's
 #               sweeps reading and writing the packed nodes and multipliers through storage
 #               (`--sweep-memory storage`, the GPUs' way before 2026-11-28), beside step 5's
@@ -312,7 +312,7 @@ run_step group-512 "${NEED[10]}" 90 - \
 run_step group-1024 "${NEED[11]}" 90 - \
   "$BIN" bench --profile "${GROUP[@]}" --contact-group 1024
 run_step pairs "${NEED[12]}" 60 - \
-  "$BIN" bench --profile "${PAIRS[@]}" --pair-blocks
+  "$BIN" bench --profile "${PAIRS[@]}" --pair-blocks off
 run_step storage "${NEED[13]}" 60 - \
   "$BIN" bench --profile "${PAIRS[@]}" --sweep-memory storage
 

@@ -169,7 +169,7 @@ fn unit_key(j: u32, t: u32, code: u32) -> u32 {
 const PARALLEL_COLOURING: bool = true;
 
 // Whether the one-workgroup solve pairs node pairs met from both passes into 2 x 2 blocks
-// (host-set: crate::gpu::shader::Features::contact_pair_blocks, an option); without, none of the
+// (host-set: crate::gpu::shader::Features::contact_pair_blocks; GPUs); without, none of the
 // pairing is compiled and a colouring unit is its constraint's three references.
 const PAIR_BLOCKS: bool = true;
 

@@ -9,10 +9,10 @@
 // contact_colour.wgsl (the one-workgroup path's compaction and colouring, `compact`).
 //
 // Two paths, chosen by size on the host: `solve_one`, every sweep in one workgroup (colours
-// separated by barriers; the fastest for small contact sets; with PAIR_BLOCKS, an option not
-// taken by default, the two constraints of a node pair met from both passes swept together as a
-// 2 x 2 block, `block_packed`, as the CPU reference does: the striker's sweeps a step 2.5 x
-// fewer, but f32 fails the contact patch test's 8/6 mesh with them), and `sweep_color` + `recheck`, one
+// separated by barriers; the fastest for small contact sets; with PAIR_BLOCKS, the GPUs' default
+// and not the CPU adapters', the two constraints of a node pair met from both passes swept
+// together as a 2 x 2 block, `block_packed`, as the CPU reference does: the striker's sweeps a
+// step 2.5 x fewer), and `sweep_color` + `recheck`, one
 // dispatch per colour and sweep over as many workgroups as the colour needs. With many active
 // slots (cc.p.split) the one-workgroup path leaves its re-checks to `recheck_active`, one thread
 // per active slot over many workgroups, dispatched between its rounds: the same constraints and
@@ -308,14 +308,15 @@ fn packed_impulse(i: vec3<u32>, n: vec2<f32>, xi: f32, d: f32, inv_scale: f32) {
 }
 
 // Smallest determinant of a 2 x 2 block, relative to the product of its diagonal, that is solved
-// as a block (f32; the CPU reference's 1e-12 is below f32's resolution). Below it the two rows
-// are swept one after the other.
+// as a block (f32; the CPU reference's 1e-12 is below f32's resolution). Below it the block is
+// not inverted: one constraint alone (the one that carries the load first), neither, or the two
+// one after the other, the first that holds.
 const BLOCK_DET: f32 = 1e-3;
 
 // ContactSet::block on packed constraint q and its partner p: the 2 x 2 linear complementarity
 // problem of their multipliers solved exactly (both pushing, either alone, or neither, the first
 // that holds); returns the larger change of their gaps. The same arithmetic in f32.
-fn block_packed(q: u32, p: u32, dt: f32, inv_scale: f32) -> f32 {
+fn block_packed(q: u32, p: u32, dt: f32, inv_scale: f32, tol: f32) -> f32 {
     let r0k = fws[cc.p.f_row + 2u * q];
     var r1k = row1(q);
     let r0j = fws[cc.p.f_row + 2u * p];
@@ -343,51 +344,61 @@ fn block_packed(q: u32, p: u32, dt: f32, inv_scale: f32) -> f32 {
     let lj = r1j.x;
     let gk = r0k.z + dt * packed_relative(ik, nk, xk);
     let gj = r0j.z + dt * packed_relative(ij, nj, xj);
-    // The gaps without either impulse: q + W mu is the gap at the multipliers mu.
-    let qk = gk - wk * lk - wkj * lj;
-    let qj = gj - wkj * lk - wj * lj;
+    // In increments d of the multipliers from where they are, l: the gaps there, g, are what the
+    // sweeps drive to zero, and the gaps at l + d are g + W d. The rounding of the 2 x 2 inverse
+    // of a nearly redundant pair then scales with g, not with the multipliers, and the fixed
+    // point is g = 0 however W rounds (ContactSet::block, the same form).
     let det = wk * wj - wkj * wkj;
-    var mu = vec2<f32>(0.0);
-    var both = false;
+    var d = vec2<f32>(0.0);
+    var found = false;
     if (det > BLOCK_DET * wk * wj) {
-        let m = vec2<f32>((-qk * wj + qj * wkj) / det, (-qj * wk + qk * wkj) / det);
-        if (m.x > 0.0 && m.y > 0.0) {
-            mu = m;
-            both = true;
-        }
+        d = vec2<f32>((-gk * wj + gj * wkj) / det, (-gj * wk + gk * wkj) / det);
+        found = lk + d.x > 0.0 && lj + d.y > 0.0;
     }
-    if (!both) {
-        if (qk < 0.0 && qj - wkj * qk / wk >= 0.0) {
-            mu.x = -qk / wk;
-        } else if (qj < 0.0 && qk - wkj * qj / wj >= 0.0) {
-            mu.y = -qj / wj;
-        } else if (qk < 0.0 || qj < 0.0) {
+    if (!found) {
+        // k alone (j released, k's gap closed), j alone, neither. The gap of the released one is
+        // written without the cancellation of its large terms, and may be `tol` short of zero
+        // (what the sweeps accept): for a pair that rounding leaves redundant (two nodes that
+        // coincide, det 0) either alone holds, and the one that carries the load keeps it, so
+        // that the load does not jump between the two from sweep to sweep and step to step.
+        let dt0 = max(det, 0.0);
+        let k_alone = vec2<f32>(-(gk - wkj * lj) / wk, -lj);
+        let j_alone = vec2<f32>(-lk, -(gj - wkj * lk) / wj);
+        let k_holds = lk + k_alone.x > 0.0 && gj - wkj / wk * gk - lj * dt0 / wk >= 0.0;
+        let j_holds = lj + j_alone.y > 0.0 && gk - wkj / wj * gj - lk * dt0 / wj >= 0.0;
+        if (k_holds && (lk >= lj || !j_holds)) {
+            d = k_alone;
+        } else if (j_holds) {
+            d = j_alone;
+        } else if (gk - wk * lk - wkj * lj >= 0.0 && gj - wkj * lk - wj * lj >= 0.0) {
+            d = vec2<f32>(-lk, -lj);
+        } else {
             // (Round-off, or a block below BLOCK_DET: the two updates one after the other.)
-            mu.x = max(lk - gk / wk, 0.0);
-            mu.y = max(lj - (gj + wkj * (mu.x - lk)) / wj, 0.0);
+            d.x = max(lk - gk / wk, 0.0) - lk;
+            d.y = max(lj - (gj + wkj * d.x) / wj, 0.0) - lj;
         }
     }
-    let dk = mu.x - lk;
-    let dj = mu.y - lj;
+    let dk = d.x;
+    let dj = d.y;
     if (dk != 0.0) {
         packed_impulse(ik, nk, xk, dk, inv_scale);
-        r1k.x = mu.x;
+        r1k.x = lk + dk;
         store_row1(q, r1k);
     }
     if (dj != 0.0) {
         packed_impulse(ij, nj, xj, dj, inv_scale);
-        r1j.x = mu.y;
+        r1j.x = lj + dj;
         store_row1(p, r1j);
     }
     return max(abs(wk * dk + wkj * dj), abs(wkj * dk + wj * dj));
 }
 
 // Sweeps packed constraint q: with its partner as a 2 x 2 block when it leads a pair.
-fn sweep_packed(q: u32, dt: f32, inv_scale: f32, dummy: u32) -> f32 {
+fn sweep_packed(q: u32, dt: f32, inv_scale: f32, dummy: u32, tol: f32) -> f32 {
     if (PAIR_BLOCKS) {
         let p = ws[cc.p.o_cidx + 4u * q + 3u];
         if (p != NONE) {
-            return block_packed(q, p, dt, inv_scale);
+            return block_packed(q, p, dt, inv_scale, tol);
         }
     }
     return pgs_packed(q, dt, inv_scale, dummy);
@@ -498,7 +509,7 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
         for (var col = 0u; col < nc; col++) {
             let end = sh_off[col + 1u];
             for (var q = sh_off[col] + l; q < end; q += SG) {
-                change = max(change, sweep_packed(q, dt, inv_scale, dummy));
+                change = max(change, sweep_packed(q, dt, inv_scale, dummy, tolerance));
             }
             if (local) {
                 workgroupBarrier();
@@ -508,7 +519,7 @@ fn sweeps_one(l: u32, dt: f32, inv_scale: f32) -> u32 {
         }
         if (l == 0u) {
             for (var q = sh_off[SERIAL]; q < sh_off[SERIAL + 1u]; q++) {
-                change = max(change, sweep_packed(q, dt, inv_scale, dummy));
+                change = max(change, sweep_packed(q, dt, inv_scale, dummy, tolerance));
             }
         }
         taken += 1u;

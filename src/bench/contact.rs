@@ -37,9 +37,9 @@ pub struct ContactTiming {
     /// Plain projected Gauss-Seidel sweeps instead of the extrapolated ones, on both backends
     /// ([`crate::contact::extrapolation`]): a comparison.
     pub plain_sweeps: bool,
-    /// The GPU's one-workgroup solve with 2 x 2 blocks of node pairs
-    /// ([`crate::gpu::contact::ContactOptions::pair_blocks`]): a comparison.
-    pub pair_blocks: bool,
+    /// Whether the GPU's one-workgroup solve sweeps 2 x 2 blocks of node pairs (`None`: the
+    /// adapter's default, [`crate::gpu::contact::pair_blocks`]): a comparison.
+    pub pair_blocks: Option<bool>,
     /// How the GPU's one-workgroup solve colours its constraints (`None`: the adapter's default,
     /// [`crate::gpu::contact::parallel_colouring`]): a comparison.
     pub parallel_colouring: Option<bool>,
@@ -66,6 +66,8 @@ pub const DEFAULT_WARMUP: u64 = 2;
 struct Side<'a> {
     backend: &'static str,
     adapter: String,
+    /// Whether its solve sweeps 2 x 2 blocks of node pairs (the CPU reference always does).
+    pair_blocks: bool,
     with: &'a mut dyn Timed,
     without: &'a mut dyn Timed,
     friction: Option<&'a mut dyn Timed>,
@@ -119,9 +121,9 @@ fn contact_rows(
         .map(|s| s.failure.as_ref().map(|f| f.count()))
         .collect();
     let cpu_first = sides.first().is_some_and(|s| s.backend == "cpu");
-    let meta: Vec<(&'static str, String)> = sides
+    let meta: Vec<(&'static str, String, bool)> = sides
         .iter()
-        .map(|s| (s.backend, s.adapter.clone()))
+        .map(|s| (s.backend, s.adapter.clone(), s.pair_blocks))
         .collect();
     // Every variant of every side, in one alternation.
     let mut runs: Vec<Box<dyn FnMut() -> Result<f64> + '_>> = Vec::new();
@@ -186,7 +188,7 @@ fn contact_rows(
             rounds,
             warmup,
             plain_sweeps: timing.plain_sweeps,
-            pair_blocks: timing.pair_blocks,
+            pair_blocks: meta[k].2,
             wall_seconds: wall,
             steps_per_second: total as f64 / wall,
             free_seconds: t[1].iter().sum(),
@@ -324,15 +326,24 @@ fn gpu_solvers(
     Ok((model, with, without, rough?, failing?))
 }
 
+/// Whether the GPU of `ctx` sweeps 2 x 2 blocks of node pairs with `timing`'s options.
+fn gpu_pairs(ctx: &GpuContext, timing: &ContactTiming) -> bool {
+    timing
+        .pair_blocks
+        .unwrap_or_else(|| crate::gpu::contact::pair_blocks(ctx.info.device_type))
+}
+
 /// The model with contact of `solvers`, and the side of `backend` on `adapter` that times them.
 fn side<'a, S: Timed>(
     backend: &'static str,
     adapter: String,
+    pair_blocks: bool,
     (model, with, without, rough, failing): &'a mut Solvers<S>,
 ) -> (&'a Model, Side<'a>) {
     let side = Side {
         backend,
         adapter,
+        pair_blocks,
         with,
         without,
         friction: rough.as_mut().map(|s| s as &mut dyn Timed),
@@ -361,7 +372,12 @@ fn alone(
 /// Scene errors, or [`Error::Bench`] when a run stops before it took all its steps.
 pub fn cpu_contact(which: ContactScene, size: usize, timing: &ContactTiming) -> Result<ContactRow> {
     let mut cpu = cpu_solvers(which, size, timing)?;
-    alone(which, size, side("cpu", solver_adapter(), &mut cpu), timing)
+    alone(
+        which,
+        size,
+        side("cpu", solver_adapter(), true, &mut cpu),
+        timing,
+    )
 }
 
 /// Times the GPU of `ctx` on a contact scene of `size`, as [`cpu_contact`] (with
@@ -380,7 +396,7 @@ pub fn gpu_contact(
     alone(
         which,
         size,
-        side("gpu", ctx.adapter_name(), &mut gpu),
+        side("gpu", ctx.adapter_name(), gpu_pairs(&ctx, timing), &mut gpu),
         timing,
     )
 }
@@ -400,8 +416,8 @@ pub fn both_contact(
 ) -> Result<Vec<ContactRow>> {
     let mut gpu = gpu_solvers(&ctx, which, size, timing)?;
     let mut cpu = cpu_solvers(which, size, timing)?;
-    let (model, cpu) = side("cpu", solver_adapter(), &mut cpu);
-    let (_, gpu) = side("gpu", ctx.adapter_name(), &mut gpu);
+    let (model, cpu) = side("cpu", solver_adapter(), true, &mut cpu);
+    let (_, gpu) = side("gpu", ctx.adapter_name(), gpu_pairs(&ctx, timing), &mut gpu);
     contact_rows(which, size, model, vec![cpu, gpu], timing)
 }
 
@@ -419,7 +435,7 @@ mod tests {
             friction,
             failure: None,
             plain_sweeps: false,
-            pair_blocks: false,
+            pair_blocks: None,
             parallel_colouring: None,
             local_sweeps: None,
             search_one: None,

@@ -153,12 +153,12 @@ pub struct BenchArgs {
     /// extrapolated ones (both backends): a comparison.
     #[arg(long)]
     pub plain_sweeps: bool,
-    /// Time the GPU's one-workgroup contact solve with 2 x 2 blocks (the two constraints of a
-    /// node pair met from both passes solved together, as on the CPU reference;
-    /// `ContactOptions::pair_blocks`, not the default): a comparison, for the tables and
-    /// --profile.
-    #[arg(long)]
-    pub pair_blocks: bool,
+    /// Whether the GPU's one-workgroup contact solve sweeps 2 x 2 blocks (the two constraints
+    /// of a node pair met from both passes solved together, as on the CPU reference) or each
+    /// constraint on its own (default: blocks on GPUs, not on CPU adapters;
+    /// `ricochet::gpu::contact::pair_blocks`): a comparison, for the tables and --profile.
+    #[arg(long, value_enum)]
+    pub pair_blocks: Option<BenchPairBlocks>,
     /// How the GPU's one-workgroup contact solve colours its constraints (default: in parallel
     /// rounds on GPUs, in slot order on CPU adapters; `ricochet::gpu::contact::parallel_colouring`):
     /// a comparison, for the tables and --profile.
@@ -358,6 +358,16 @@ pub enum BenchColouring {
     Serial,
     /// Greedy in a hashed order, in parallel Jones-Plassmann rounds (the GPUs' default).
     Parallel,
+}
+
+/// `bench --pair-blocks`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchPairBlocks {
+    /// Each constraint swept on its own (the CPU adapters' default).
+    Off,
+    /// The two constraints of a node pair met from both passes as a 2 x 2 block (the GPUs'
+    /// default).
+    On,
 }
 
 /// `bench --sweep-memory`.

@@ -20,7 +20,8 @@ use ricochet::gpu::GpuContext;
 use ricochet::scene::Scene;
 
 use super::args::{
-    BenchArgs, BenchBackend, BenchColouring, BenchScene, BenchSearch, BenchSweepMemory,
+    BenchArgs, BenchBackend, BenchColouring, BenchPairBlocks, BenchScene, BenchSearch,
+    BenchSweepMemory,
 };
 
 /// The options of `ricochet bench` for the device check (`benches/device.sh`).
@@ -70,6 +71,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
     } = args;
     let parallel_colouring = colouring.map(|c| c == BenchColouring::Parallel);
     let local_sweeps = sweep_memory.map(|m| m == BenchSweepMemory::Workgroup);
+    let pair_blocks = pair_blocks.map(|p| p == BenchPairBlocks::On);
     let search_one = search.map(|s| s == BenchSearch::One);
     if rounds == 0 || steps == 0 {
         anyhow::bail!("--steps and --rounds must be positive");

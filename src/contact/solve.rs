@@ -403,32 +403,48 @@ impl ContactSet {
         let (wk, wj, wkj) = (c.w, d.w, self.coupling(&c, &d));
         let gk = c.g0 + dt * self.relative(&c);
         let gj = d.g0 + dt * self.relative(&d);
-        // The gaps without either impulse: q + W mu is the gap at the multipliers mu.
-        let qk = gk - wk * c.lambda - wkj * d.lambda;
-        let qj = gj - wkj * c.lambda - wj * d.lambda;
+        // In increments d of the multipliers from where they are, l: the gaps there, g, are what
+        // the sweeps drive to zero, and the gaps at l + d are g + W d. The rounding of the 2 x 2
+        // inverse of a nearly redundant pair then scales with g, not with the multipliers, and
+        // the fixed point is g = 0 however W is rounded (what the GPU's f32 `block_packed`
+        // needs; the same form here).
         let det = wk * wj - wkj * wkj;
-        let mut mu = [0.0, 0.0];
+        let (lk, lj) = (c.lambda, d.lambda);
+        let gap = |dk: f64, dj: f64| (gk + wk * dk + wkj * dj, gj + wkj * dk + wj * dj);
         let both = (det > 1e-12 * wk * wj)
-            .then(|| [(-qk * wj + qj * wkj) / det, (-qj * wk + qk * wkj) / det]);
-        if let Some(m) = both.filter(|m| m[0] > 0.0 && m[1] > 0.0) {
-            mu = m;
-        } else if qk < 0.0 && qj - wkj * qk / wk >= 0.0 {
-            mu[0] = -qk / wk;
-        } else if qj < 0.0 && qk - wkj * qj / wj >= 0.0 {
-            mu[1] = -qj / wj;
-        } else if qk < 0.0 || qj < 0.0 {
+            .then(|| ((-gk * wj + gj * wkj) / det, (-gj * wk + gk * wkj) / det))
+            .filter(|&(dk, dj)| lk + dk > 0.0 && lj + dj > 0.0);
+        // k alone (j released, k's gap closed), j alone, neither. The gap of the released one is
+        // written without the cancellation of its large terms, and may be the sweeps' tolerance
+        // short of zero: for a pair that rounding leaves redundant (two nodes that coincide,
+        // det 0) either alone holds, and the one that carries the load keeps it, so that the
+        // load does not jump between the two from sweep to sweep and step to step.
+        let det0 = det.max(0.0);
+        let k_alone = (-(gk - wkj * lj) / wk, -lj);
+        let j_alone = (-lk, -(gj - wkj * lk) / wj);
+        let neither = gap(-lk, -lj);
+        let k_holds = lk + k_alone.0 > 0.0 && gj - wkj / wk * gk - lj * det0 / wk >= 0.0;
+        let j_holds = lj + j_alone.1 > 0.0 && gk - wkj / wj * gj - lk * det0 / wj >= 0.0;
+        let (dk, dj) = if let Some(d) = both {
+            d
+        } else if k_holds && (lk >= lj || !j_holds) {
+            k_alone
+        } else if j_holds {
+            j_alone
+        } else if neither.0 >= 0.0 && neither.1 >= 0.0 {
+            (-lk, -lj)
+        } else {
             // (Only round-off lands here: the two updates one after the other.)
-            mu[0] = (c.lambda - gk / wk).max(0.0);
-            mu[1] = (d.lambda - (gj + wkj * (mu[0] - c.lambda)) / wj).max(0.0);
-        }
-        let (dk, dj) = (mu[0] - c.lambda, mu[1] - d.lambda);
+            let dk = (lk - gk / wk).max(0.0) - lk;
+            (dk, (lj - (gj + wkj * dk) / wj).max(0.0) - lj)
+        };
         if dk != 0.0 {
             self.impulse(&c, dk);
-            self.cons[k].lambda = mu[0];
+            self.cons[k].lambda = lk + dk;
         }
         if dj != 0.0 {
             self.impulse(&d, dj);
-            self.cons[j].lambda = mu[1];
+            self.cons[j].lambda = lj + dj;
         }
         (wk * dk + wkj * dj).abs().max((wkj * dk + wj * dj).abs())
     }

@@ -64,8 +64,8 @@ pub struct Features {
     /// order in one invocation (CPU adapters: [`crate::gpu::contact::parallel_colouring`]).
     pub contact_parallel_colouring: bool,
     /// Whether the one-workgroup solve pairs the two constraints of a node pair met from both
-    /// passes and solves them as a 2 x 2 block (WGSL `PAIR_BLOCKS`;
-    /// [`crate::gpu::contact::ContactOptions::pair_blocks`], an option): compiled out otherwise.
+    /// passes and solves them as a 2 x 2 block (WGSL `PAIR_BLOCKS`; GPUs:
+    /// [`crate::gpu::contact::pair_blocks`]): compiled out otherwise.
     pub contact_pair_blocks: bool,
     /// Whether the one-workgroup solve's sweeps keep the packed nodes' records and the
     /// multipliers in workgroup memory where they fit (WGSL `LOCAL_SWEEPS`; GPUs:
@@ -115,7 +115,7 @@ impl Default for Features {
                 256,
             ),
             contact_parallel_colouring: true,
-            contact_pair_blocks: false,
+            contact_pair_blocks: true,
             contact_local_sweeps: true,
         }
     }

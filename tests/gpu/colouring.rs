@@ -159,7 +159,7 @@ fn gpu_colouring_of_the_one_workgroup_solve_is_its_cpu_reference() {
             compact_local: local,
             group,
             parallel_colouring: Some(parallel),
-            pair_blocks,
+            pair_blocks: Some(pair_blocks),
             ..ContactOptions::default()
         };
         let mut gpu = solver(&ctx, &text, options);

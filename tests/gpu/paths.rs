@@ -307,7 +307,7 @@ fn gpu_sweeps_in_workgroup_memory_give_the_bits_of_the_sweeps_through_storage() 
             "striker-pairs",
             &striker,
             ContactOptions {
-                pair_blocks: true,
+                pair_blocks: Some(true),
                 ..base
             },
         ),
@@ -641,15 +641,14 @@ fn gpu_one_workgroup_contact_kernels_agree_at_every_group_size() {
     }
 }
 
-/// The one-workgroup solve's 2 x 2 blocks of node pairs (`ContactOptions::pair_blocks`, an
-/// option: the CPU reference's `ContactSet::pair_blocks` on the device) against its constraints
-/// swept one by one (the default), on the striker into its plate, whose two-pass constraints are
-/// nearly all in such pairs: both stop at the same tolerance, so they agree to the solve's
-/// accuracy (the displacements within [`solve_accuracy`], the energies within 1e-4 of the
-/// kinetic energy at the start), the blocks give the same bits twice and take at most half the
-/// sweeps a step (measured on lavapipe on 2026-11-28: see the printed line). Not the default: in
-/// f32 the contact patch test's 8/6 mesh stops settling with them (`tests/gpu/patch.rs`; the
-/// option's doc).
+/// The one-workgroup solve's 2 x 2 blocks of node pairs (`ContactOptions::pair_blocks`, the
+/// GPUs' default, not the CPU adapters': the CPU reference's `ContactSet::pair_blocks` on the
+/// device) against its constraints swept one by one, on the striker into its plate, whose
+/// two-pass constraints are nearly all in such pairs: both stop at the same tolerance, so they
+/// agree to the solve's accuracy (the displacements within [`solve_accuracy`], the energies
+/// within 1e-4 of the kinetic energy at the start), the blocks give the same bits twice and take
+/// at most half the sweeps a step (measured on lavapipe on 2026-11-28: see the printed line).
+/// The contact patch test in blocks is in `tests/gpu/patch.rs`.
 #[test]
 fn gpu_pair_blocks_agree_with_one_by_one_sweeps_in_fewer_sweeps() {
     let Some(ctx) = context() else { return };
@@ -657,7 +656,7 @@ fn gpu_pair_blocks_agree_with_one_by_one_sweeps_in_fewer_sweeps() {
     let text = asset("stress/striker_plate_gpu_energy.toml");
     let with = |pair_blocks: bool| ContactOptions {
         multi: Some(false),
-        pair_blocks,
+        pair_blocks: Some(pair_blocks),
         ..ContactOptions::default()
     };
     let (ro, model, uo, _) = run_gpu_with(&ctx, &text, "striker-one-by-one", with(false));

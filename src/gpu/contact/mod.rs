@@ -41,7 +41,9 @@ pub mod tables;
 pub use crate::gpu::shader::local_constraints;
 pub use kernels::{stage_source, ContactKernels, MODULES};
 pub(crate) use options::Path;
-pub use options::{local_sweeps, one_group, parallel_colouring, ContactOptions, SearchSwitch};
+pub use options::{
+    local_sweeps, one_group, pair_blocks, parallel_colouring, ContactOptions, SearchSwitch,
+};
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;

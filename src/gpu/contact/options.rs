@@ -31,15 +31,12 @@ pub struct ContactOptions {
     /// Plain projected Gauss-Seidel sweeps on the one-workgroup path (`true`) instead of the
     /// extrapolated ones (the default, as on the CPU reference); for comparisons.
     pub plain_sweeps: bool,
-    /// 2 x 2 blocks in the one-workgroup solve (`true`): the two constraints of a node pair met
-    /// from both passes solved together, as on the CPU reference (`contact_colour.wgsl`
-    /// `pair_constraints`, `contact_solve.wgsl` `block_packed`), instead of each on its own (the
-    /// default). Not the default: the bench striker's sweeps a step go 15.4 -> 6.1 (10^4
-    /// elements, lavapipe, 2026-11-28), but the pairs that win are nearly redundant (1 - cos^2 of
-    /// their rows below 1e-4), their 2 x 2 solve is at the limit of f32, and the contact patch
-    /// test's 8/6 mesh (`tests/gpu/patch.rs`) then stops settling (stress error 1.9e-2 p, where
-    /// 1e-4 is asked).
-    pub pair_blocks: bool,
+    /// 2 x 2 blocks in the one-workgroup solve (`Some(true)`): the two constraints of a node
+    /// pair met from both passes solved together, as on the CPU reference (`contact_colour.wgsl`
+    /// `pair_constraints`, `contact_solve.wgsl` `block_packed`), or each on its own
+    /// (`Some(false)`); `None`: [`pair_blocks`]. The bench striker's sweeps a step go 15.4 -> 6.1
+    /// (10^4 elements) and 28.5 -> 10.6 (10^5) with them, on any adapter.
+    pub pair_blocks: Option<bool>,
     /// Whether the one-workgroup solve's sweeps keep the packed nodes' records (dv, 1/m) and the
     /// multipliers in workgroup memory, in the compaction's arrays, free after it, where they fit
     /// (`Some(true)`), or read and write them through storage (`Some(false)`); `None`:
@@ -88,7 +85,7 @@ impl ContactOptions {
         split: None,
         one: None,
         plain_sweeps: false,
-        pair_blocks: false,
+        pair_blocks: None,
         local_sweeps: None,
         candidate_capacity: None,
         group: None,
@@ -117,6 +114,18 @@ pub struct SearchSwitch {
 /// loop: the striker ran 5-11 % fewer steps a second (10^4 and 10^5 elements, 2026-11-28), with
 /// 7-12 % more sweeps in the hashed order than in slot order.
 pub fn parallel_colouring(device_type: wgpu::DeviceType) -> bool {
+    device_type != wgpu::DeviceType::Cpu
+}
+
+/// Whether the one-workgroup solve sweeps the node pairs met from both passes as 2 x 2 blocks
+/// on an adapter of `device_type` ([`ContactOptions::pair_blocks`]): on GPUs, not on CPU
+/// adapters. The blocks cut the sweeps on every adapter (the bench striker 15.4 -> 6.1 sweeps a
+/// step at 10^4 elements, 28.5 -> 10.6 at 10^5, lavapipe, 2026-11-29), and the GPUs' solve is
+/// bound by its sweeps (the striker's at 10^5: 211 us a step in 28 sweeps on an NVIDIA H200,
+/// 2026-11-28). On lavapipe the pairing costs more than the sweeps it saves: the 10^5 striker's
+/// one-workgroup contact stage took 1 466-1 499 us a step with them against 1 302-1 355 without
+/// (2026-11-29).
+pub fn pair_blocks(device_type: wgpu::DeviceType) -> bool {
     device_type != wgpu::DeviceType::Cpu
 }
 

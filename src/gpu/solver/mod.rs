@@ -150,6 +150,9 @@ impl GpuSolver {
         let contact_parallel_colouring = contact
             .parallel_colouring
             .unwrap_or_else(|| super::contact::parallel_colouring(ctx.info.device_type));
+        let contact_pair_blocks = contact
+            .pair_blocks
+            .unwrap_or_else(|| super::contact::pair_blocks(ctx.info.device_type));
         let contact_local_sweeps = contact
             .local_sweeps
             .unwrap_or_else(|| super::contact::local_sweeps(ctx.info.device_type));
@@ -182,7 +185,7 @@ impl GpuSolver {
             contact_group,
             contact_cap,
             contact_parallel_colouring,
-            contact_pair_blocks: contact.pair_blocks,
+            contact_pair_blocks,
             contact_local_sweeps,
         };
         let limits = ctx.device.limits();
