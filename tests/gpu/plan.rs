@@ -254,10 +254,10 @@ fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
         friction: Some(0.3),
         failure: Some(ricochet::bench::FAILURE_STRAIN),
         plain_sweeps: false,
-        // (The GPUs' 2 x 2 blocks of node pairs, colouring and sweeps in workgroup memory, which
-        // lavapipe does not take by default.)
-        pair_blocks: Some(true),
-        // (The GPUs' colouring.)
+        // (Constraints one by one, lavapipe's default: the blocks are in tests/gpu/patch.rs and
+        // tests/gpu/paths.rs.)
+        pair_blocks: None,
+        // (The GPUs' colouring, which lavapipe does not take by default.)
         parallel_colouring: Some(true),
         // (The GPUs' sweeps in workgroup memory, which lavapipe does not take by default.)
         local_sweeps: Some(true),
