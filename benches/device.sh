@@ -46,6 +46,11 @@
 #               sweeps reading and writing the packed nodes and multipliers through storage
 #               (`--sweep-memory storage`, the GPUs' way before 2026-11-28), beside step 5's
 #               workgroup memory                                                  -> device.log
+#  15. stage-one the profile of the striker and the pile at 10^4 and 10^5 with the contact stage
+#               after the search in one workgroup (`--contact-stage one`: narrow phase, gather,
+#               solve, finish and reports in one dispatch, the node preparation and the search
+#               plan in another; CPU adapters' way for small sets), beside step 5's per-item
+#               kernels                                                           -> device.log
 # The JSON files are the binary's own (`ricochet bench --json`, `--probe`, `--profile`). With them,
 # meta.json (date, commit, the binary's version, adapter, driver, nvidia-smi, each step's command,
 # status, exit code and seconds, the steps skipped) and device.log (all that was printed) go to
@@ -98,6 +103,7 @@
 #   group-512, group-1024  as step 5's contact scenes: about 10 s each                 [90 s]
 #   pairs    800 steps each of the striker at 10^4, 10^5, 10^6: about 15 s             [60 s]
 #   storage  likewise                                                                 [60 s]
+#   stage-one 800 steps each of the striker and the pile at 10^4 and 10^5: about 10 s   [60 s]
 # About 3.5-4 minutes in all by these estimates; on an NVIDIA H200 on 2026-11-28 (c2f47a1) the
 # first nine steps took 52 s, the call 84 s of device time with the machine's start; the caps and the default budget (450 s) keep the call inside the
 # device tool's 8 minutes for the script (10 minutes a call) even when a step hangs.
@@ -247,7 +253,7 @@ if [ "$SMALL" = 1 ]; then
   SEARCH=(--scene striker --elements 400 --warmup 10 --steps 10)
   GROUP=(--scene striker --elements 400 --warmup 10 --steps 10)
   PAIRS=(--scene striker --elements 400 --warmup 10 --steps 10)
-  NEED=(5 5 5 5 5 5 5 5 5 5 5 5 5 5)
+  NEED=(5 5 5 5 5 5 5 5 5 5 5 5 5 5 5)
 else
   PROBE=(--probe-mib 512 --probe-dispatches 1000 --rounds 10)
   CELLS=(316 1000)
@@ -263,7 +269,7 @@ else
   SEARCH=(--scene striker pile --elements 10000 100000 --warmup 600 --steps 200)
   GROUP=(--scene striker pile --elements 10000 100000 1000000 --warmup 600 --steps 200)
   PAIRS=(--scene striker --elements 10000 100000 1000000 --warmup 600 --steps 200)
-  NEED=(10 30 30 40 60 20 20 20 15 15 30 30 20 20)
+  NEED=(10 30 30 40 60 20 20 20 15 15 30 30 20 20 15)
 fi
 
 say "device check: $BIN ($VERSION, commit $COMMIT) into $OUT_DIR, budget $BUDGET s"
@@ -315,6 +321,8 @@ run_step pairs "${NEED[12]}" 60 - \
   "$BIN" bench --profile "${PAIRS[@]}" --pair-blocks off
 run_step storage "${NEED[13]}" 60 - \
   "$BIN" bench --profile "${PAIRS[@]}" --sweep-memory storage
+run_step stage-one "${NEED[14]}" 60 - \
+  "$BIN" bench --profile "${SEARCH[@]}" --contact-stage one
 
 say "done: $DIR ($([ "$FAILED" = 0 ] && echo "every step ran" || echo "see meta.json: not every step ran"))"
 [ "$FAILED" = 0 ] || exit 3

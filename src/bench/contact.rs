@@ -52,6 +52,11 @@ pub struct ContactTiming {
     /// Threads of the GPU's one-workgroup contact kernels (`None`: the adapter's default,
     /// [`crate::gpu::contact::one_group`]): a comparison.
     pub group: Option<u32>,
+    /// The GPU's contact stage after the search in one workgroup (`Some(true)`: on any adapter,
+    /// with the one-workgroup solve whatever the size) or in its per-item kernels
+    /// (`Some(false)`); `None`: the default ([`crate::gpu::contact::one::one_path`]). A
+    /// comparison.
+    pub one: Option<bool>,
     /// Whether the GPU records each batch while the device runs the one before
     /// ([`GpuSolver::set_record_ahead`]) or only after its readback (`None`: the adapter's
     /// default, [`crate::gpu::solver::record_ahead`]): a comparison.
@@ -60,6 +65,48 @@ pub struct ContactTiming {
 
 /// Warm-up steps of a contact row unless asked for more: two, the first search included.
 pub const DEFAULT_WARMUP: u64 = 2;
+
+impl ContactTiming {
+    /// `steps` steps in `rounds` rounds after [`DEFAULT_WARMUP`], the pile in one `[[contact]]`,
+    /// every other choice the default.
+    pub fn new(steps: u64, rounds: u32) -> Self {
+        ContactTiming {
+            steps,
+            rounds,
+            warmup: DEFAULT_WARMUP,
+            pile: PileContact::All,
+            friction: None,
+            failure: None,
+            plain_sweeps: false,
+            pair_blocks: None,
+            parallel_colouring: None,
+            local_sweeps: None,
+            search_one: None,
+            group: None,
+            one: None,
+            record_ahead: None,
+        }
+    }
+}
+
+/// The GPU's contact options of `timing` (the contact stage in one workgroup takes the
+/// one-workgroup solve with its re-checks inside: neither the per-colour solve nor split
+/// re-checks).
+pub fn contact_options(timing: &ContactTiming) -> crate::gpu::contact::ContactOptions {
+    let one = timing.one == Some(true);
+    crate::gpu::contact::ContactOptions {
+        multi: one.then_some(false),
+        split: one.then_some(false),
+        one: timing.one,
+        plain_sweeps: timing.plain_sweeps,
+        pair_blocks: timing.pair_blocks,
+        parallel_colouring: timing.parallel_colouring,
+        local_sweeps: timing.local_sweeps,
+        search_one: timing.search_one,
+        group: timing.group,
+        ..Default::default()
+    }
+}
 
 /// One backend's solvers of a contact scene, as [`contact_rows`] times them: with and without
 /// the scene's `[[contact]]`, and with friction when asked.
@@ -299,15 +346,7 @@ fn gpu_solvers(
     timing: &ContactTiming,
 ) -> Result<Solvers<GpuSolver>> {
     let pile = timing.pile;
-    let options = crate::gpu::contact::ContactOptions {
-        plain_sweeps: timing.plain_sweeps,
-        pair_blocks: timing.pair_blocks,
-        parallel_colouring: timing.parallel_colouring,
-        local_sweeps: timing.local_sweeps,
-        search_one: timing.search_one,
-        group: timing.group,
-        ..Default::default()
-    };
+    let options = contact_options(timing);
     let solver = |(m, p, s): (Model, Plan, crate::step::Schedule)| {
         let mut g = GpuSolver::with_options(ctx.clone(), &m, &p, s, None, options)?;
         if let Some(on) = timing.record_ahead {
@@ -428,20 +467,37 @@ mod tests {
 
     fn timing(steps: u64, rounds: u32, pile: PileContact, friction: Option<f64>) -> ContactTiming {
         ContactTiming {
-            steps,
-            rounds,
-            warmup: DEFAULT_WARMUP,
             pile,
             friction,
-            failure: None,
-            plain_sweeps: false,
-            pair_blocks: None,
-            parallel_colouring: None,
-            local_sweeps: None,
-            search_one: None,
-            group: None,
-            record_ahead: None,
+            ..ContactTiming::new(steps, rounds)
         }
+    }
+
+    /// `one` reaches the GPU's options: asked for, the stage in one workgroup takes the
+    /// one-workgroup solve with its re-checks inside, on any adapter (`Path::choose` refuses it
+    /// with the per-colour solve or split re-checks); not asked for, the adapter decides.
+    #[test]
+    fn the_contact_stage_asked_for_reaches_the_gpu_options() {
+        let one = contact_options(&ContactTiming {
+            one: Some(true),
+            ..ContactTiming::new(1, 1)
+        });
+        assert_eq!(
+            (one.one, one.multi, one.split),
+            (Some(true), Some(false), Some(false))
+        );
+        let items = contact_options(&ContactTiming {
+            one: Some(false),
+            ..ContactTiming::new(1, 1)
+        });
+        assert_eq!(
+            (items.one, items.multi, items.split),
+            (Some(false), None, None)
+        );
+        assert_eq!(
+            contact_options(&ContactTiming::new(1, 1)),
+            crate::gpu::contact::ContactOptions::default()
+        );
     }
 
     /// `warmup` runs each variant of a contact scene that many steps before the timed ones: the

@@ -29,7 +29,9 @@ mod timing;
 
 pub use block::{cpu, gpu};
 pub use bytes::block_bytes_per_element_cycle;
-pub use contact::{both_contact, cpu_contact, gpu_contact, ContactTiming, DEFAULT_WARMUP};
+pub use contact::{
+    both_contact, contact_options, cpu_contact, gpu_contact, ContactTiming, DEFAULT_WARMUP,
+};
 pub use probe::{probe, probe_summary, ProbeReport};
 pub use profile::{no_timestamps, profile, profile_table, ProfileReport, ProfileRow, ProfileScene};
 pub use scenes::{

@@ -187,6 +187,12 @@ pub struct BenchArgs {
     /// `ricochet::gpu::contact::one_group`): a comparison, for the tables and --profile.
     #[arg(long)]
     pub contact_group: Option<u32>,
+    /// How the GPU's contact stage after the search is dispatched (default: in one workgroup on
+    /// CPU adapters with a small contact set, per item otherwise; `ricochet::gpu::contact::one`):
+    /// `one` takes it in one workgroup on any adapter (with the one-workgroup solve, whatever
+    /// the size), a comparison for the tables and --profile.
+    #[arg(long, value_enum)]
+    pub contact_stage: Option<BenchContactStage>,
     /// Also write the table(s) as JSON: the block rows as an array; with a contact scene,
     /// an object {"block": [...], "contact": [...]}; with --probe or --profile, its report.
     #[arg(long)]
@@ -385,6 +391,16 @@ pub enum BenchSearch {
     /// In one workgroup: one dispatch a step, empty on the steps that do not search.
     One,
     /// In its eleven per-item kernels, dispatched indirectly (empty on those steps).
+    Items,
+}
+
+/// `bench --contact-stage`.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchContactStage {
+    /// The narrow phase, the gather, the solve, `finish` and the reports in one workgroup, one
+    /// dispatch, and the node preparation in another (CPU adapters' default for small sets).
+    One,
+    /// Each in its own kernels over many workgroups (the GPUs' default).
     Items,
 }
 

@@ -20,8 +20,8 @@ use ricochet::gpu::GpuContext;
 use ricochet::scene::Scene;
 
 use super::args::{
-    BenchArgs, BenchBackend, BenchColouring, BenchPairBlocks, BenchScene, BenchSearch,
-    BenchSweepMemory,
+    BenchArgs, BenchBackend, BenchColouring, BenchContactStage, BenchPairBlocks, BenchScene,
+    BenchSearch, BenchSweepMemory,
 };
 
 /// The options of `ricochet bench` for the device check (`benches/device.sh`).
@@ -65,10 +65,12 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         no_record_ahead,
         search,
         contact_group,
+        contact_stage,
         json,
         adapter,
         device,
     } = args;
+    let one = contact_stage.map(|s| s == BenchContactStage::One);
     let parallel_colouring = colouring.map(|c| c == BenchColouring::Parallel);
     let local_sweeps = sweep_memory.map(|m| m == BenchSweepMemory::Workgroup);
     let pair_blocks = pair_blocks.map(|p| p == BenchPairBlocks::On);
@@ -133,14 +135,15 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
             &ctx,
             &scenes,
             (warmup, steps),
-            ricochet::gpu::contact::ContactOptions {
+            ricochet::bench::contact_options(&ContactTiming {
                 pair_blocks,
                 parallel_colouring,
                 local_sweeps,
                 search_one,
                 group: contact_group,
-                ..Default::default()
-            },
+                one,
+                ..ContactTiming::new(steps, rounds)
+            }),
             json.as_deref(),
         );
     }
@@ -177,6 +180,7 @@ pub fn bench(args: BenchArgs) -> anyhow::Result<ExitCode> {
         local_sweeps,
         search_one,
         group: contact_group,
+        one,
         record_ahead: no_record_ahead.then_some(false),
     };
     let contact_rows = contact_rows(&contact_scenes, &elements, &timing, run_cpu, ctx.as_ref());

@@ -218,7 +218,8 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
             "group-512",
             "group-1024",
             "pairs",
-            "storage"
+            "storage",
+            "stage-one"
         ]
     );
     for s in steps {
@@ -242,6 +243,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
         (11, "--contact-group 1024"),
         (12, "--pair-blocks"),
         (13, "--sweep-memory storage"),
+        (14, "--contact-stage one"),
     ] {
         assert!(steps[k]["file"].is_null());
         assert!(device_log.contains(flag), "{device_log}");
@@ -290,7 +292,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
     let files = json_files(&dir);
     assert_eq!(files.len(), 1, "meta.json alone");
     let steps = files[0].1["steps"].as_array().expect("steps").clone();
-    assert_eq!(steps.len(), 14);
+    assert_eq!(steps.len(), 15);
     assert!(steps
         .iter()
         .all(|s| s["status"] == "skipped" && s["file"].is_null()));

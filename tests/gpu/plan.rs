@@ -263,6 +263,7 @@ fn bench_times_the_cpu_and_the_gpu_in_the_same_rounds_and_gives_their_ratio() {
         local_sweeps: Some(true),
         search_one: None,
         group: None,
+        one: None,
         // (Each batch recorded ahead, which lavapipe does not do by default.)
         record_ahead: Some(true),
     };
