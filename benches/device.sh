@@ -46,11 +46,11 @@
 #               sweeps reading and writing the packed nodes and multipliers through storage
 #               (`--sweep-memory storage`, the GPUs' way before 2026-11-28), beside step 5's
 #               workgroup memory                                                  -> device.log
-#  15. stage-one the profile of the striker and the pile at 10^4 and 10^5 with the contact stage
-#               after the search in one workgroup (`--contact-stage one`: narrow phase, gather,
-#               solve, finish and reports in one dispatch, the node preparation and the search
-#               plan in another; CPU adapters' way for small sets), beside step 5's per-item
-#               kernels                                                           -> device.log
+#  15. stage-one the profile of the striker and the pile at 10^4 and 10^5 with the whole contact
+#               stage in three one-workgroup dispatches (`--contact-stage one --search one`: the
+#               node preparation and the search plan, the search, then the narrow phase, gather,
+#               solve, finish and reports; CPU adapters' way for small sets, but for the search),
+#               beside step 5's per-item kernels and step 10's search     -> device.log
 # The JSON files are the binary's own (`ricochet bench --json`, `--probe`, `--profile`). With them,
 # meta.json (date, commit, the binary's version, adapter, driver, nvidia-smi, each step's command,
 # status, exit code and seconds, the steps skipped) and device.log (all that was printed) go to
@@ -322,7 +322,7 @@ run_step pairs "${NEED[12]}" 60 - \
 run_step storage "${NEED[13]}" 60 - \
   "$BIN" bench --profile "${PAIRS[@]}" --sweep-memory storage
 run_step stage-one "${NEED[14]}" 60 - \
-  "$BIN" bench --profile "${SEARCH[@]}" --contact-stage one
+  "$BIN" bench --profile "${SEARCH[@]}" --contact-stage one --search one
 
 say "done: $DIR ($([ "$FAILED" = 0 ] && echo "every step ran" || echo "see meta.json: not every step ran"))"
 [ "$FAILED" = 0 ] || exit 3

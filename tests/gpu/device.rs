@@ -243,7 +243,7 @@ fn the_device_script_runs_end_to_end_at_small_sizes() {
         (11, "--contact-group 1024"),
         (12, "--pair-blocks"),
         (13, "--sweep-memory storage"),
-        (14, "--contact-stage one"),
+        (14, "--contact-stage one --search one"),
     ] {
         assert!(steps[k]["file"].is_null());
         assert!(device_log.contains(flag), "{device_log}");
