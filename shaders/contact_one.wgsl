@@ -25,29 +25,56 @@ fn contact_one(@builtin(local_invocation_id) lid: vec3<u32>) {
     storageBarrier();
     solve_step(l);
     storageBarrier();
-    // `finish`: each invocation whole workgroups' worth of nodes, their work summed in node
-    // order as `finish`'s lane 0 sums its lanes.
+    // `finish`, its work summed in node order by whole workgroups' worth of nodes (CG), as
+    // `finish`'s lane 0 sums its lanes. With as many chunks as invocations (lavapipe's 8), each
+    // invocation takes whole chunks, node by node. With fewer (a GPU's 256 over a few thousand
+    // nodes), every node first takes an invocation of its own, its work kept in the solve's node
+    // records (fws[f_node..], nl + 1 of them, free once the solve has written dv back; the next
+    // pack writes them anew), and the chunks are summed from there: the same sums in the same
+    // order either way.
     let chunks = (nl + CG - 1u) / CG;
+    let spread = chunks < SG;
+    if (spread) {
+        for (var i = l; i < nl; i += SG) {
+            fws[cc.p.f_node + i] = finish_node(i);
+        }
+    }
+    storageBarrier();
     for (var c = l; c < chunks; c += SG) {
         var t = vec4<f32>(0.0);
         for (var h = 0u; h < CG; h++) {
             let i = c * CG + h;
             var w = vec4<f32>(0.0);
             if (i < nl) {
-                w = finish_node(i);
+                if (spread) {
+                    w = fws[cc.p.f_node + i];
+                } else {
+                    w = finish_node(i);
+                }
             }
             t += w;
         }
         fws[cc.p.f_wp + c] = t;
     }
     storageBarrier();
-    // `report_slots`: each invocation whole chunks of CG active slots.
+    // `report_slots`: the active slots' reports summed in runs by chunks of CG, each invocation
+    // whole chunks; with fewer chunks than invocations, every slot's report first (one
+    // invocation each), as for `finish`.
     let runs = (na + CG - 1u) / CG;
+    let spread_runs = runs < SG;
+    if (spread_runs) {
+        for (var j = l; j < na; j += SG) {
+            report_item(j);
+        }
+    }
+    storageBarrier();
     for (var c = l; c < runs; c += SG) {
         let j = c * CG;
         let n = min(CG, na - j);
-        for (var q = 0u; q < n; q++) {
-            report_item(j + q);
+        if (!spread_runs) {
+            for (var q = 0u; q < n; q++) {
+                report_item(j + q);
+            }
         }
         report_runs(j, n);
     }
